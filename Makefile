@@ -1,0 +1,36 @@
+# The README's two commands are `make run` and `make test`; both set up the
+# machine first (scripts/setup.sh is idempotent: a few seconds when done).
+SHELL := /bin/sh
+VENV  := .venv
+PY    := $(VENV)/bin/python
+UPD   := $(VENV)/bin/upd
+OUT   ?= results
+NP    ?= 2
+MPIRUN := mpirun -n $(NP) --allow-run-as-root --oversubscribe -x OMP_NUM_THREADS=1 -x OPENBLAS_NUM_THREADS=1
+export OMP_NUM_THREADS ?= 1
+export OPENBLAS_NUM_THREADS ?= 1
+export VTK_DEFAULT_OPENGL_WINDOW ?= vtkEGLRenderWindow
+export PYVISTA_OFF_SCREEN ?= true
+
+.PHONY: setup run test test-slow bench lint
+
+setup:
+	@sh scripts/setup.sh
+
+## the main job
+run: setup
+	$(UPD) analytic --out $(OUT)/analytic
+
+## the default (fast) test suite
+test: setup
+	$(PY) -m pytest -q -n 2
+
+## the slow tests (run with the benchmarks)
+test-slow: setup
+	$(PY) -m pytest -q -m slow
+
+bench: setup
+	$(PY) benchmarks/run_all.py --out $(OUT)/bench
+
+lint: setup
+	$(VENV)/bin/ruff check workbench tests benchmarks

@@ -1,0 +1,61 @@
+"""Shared test set-up: off-screen rendering, one thread per process, CLI runner."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+os.environ.setdefault("UPD_NO_PROGRESS", "1")
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+class CliResult:
+    def __init__(self, code: int, out: str, err: str):
+        self.code, self.out, self.err = code, out, err
+
+    @property
+    def json(self):
+        return json.loads(self.out)
+
+    def __repr__(self) -> str:
+        return f"CliResult(code={self.code}, err={self.err[-2000:]!r})"
+
+
+def run_upd(*args: str, timeout: float = 900, cwd: Path | None = None) -> CliResult:
+    """Run ``upd`` as a separate process (as a user would) and capture it."""
+    cmd = [sys.executable, "-m", "workbench.cli.main", *map(str, args)]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=cwd or ROOT)
+    return CliResult(p.returncode, p.stdout, p.stderr)
+
+
+@pytest.fixture
+def upd():
+    return run_upd
+
+
+def image_std(png: str | Path) -> float:
+    """Pixel standard deviation of an image (0 for a blank one)."""
+    import matplotlib.image as mpimg
+    import numpy as np
+
+    img = mpimg.imread(str(png))
+    return float(np.asarray(img, dtype=float)[..., :3].std())
+
+
+def assert_nonblank(png: str | Path, floor: float = 0.02) -> None:
+    """The image exists and its pixels vary (values in 0..1) by more than ``floor``."""
+    p = Path(png)
+    assert p.is_file(), f"missing figure {p}"
+    s = image_std(p)
+    assert s > floor, f"{p.name} looks blank (pixel std {s:.4f} <= {floor})"

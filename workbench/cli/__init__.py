@@ -1,0 +1,1 @@
+"""The ``upd`` command line: one sub-command per pipeline stage."""

@@ -1,0 +1,186 @@
+"""Entry point of the ``upd`` command.
+
+Every sub-command lives in a module ``workbench.cli.cmd_<name>`` with::
+
+    HELP = "one line for `upd --help`"
+    DESCRIPTION = "a paragraph for `upd <name> --help`"   (optional)
+    def add_arguments(parser: argparse.ArgumentParser) -> None: ...
+    def run(args: argparse.Namespace, ctx: Context) -> dict: ...
+
+``run`` returns a JSON-able summary. With ``--json`` it is printed on stdout
+(and nothing else is); otherwise a short human-readable form is. Command
+modules import heavy libraries (dolfinx, pyvista) inside ``run`` only, so
+``upd --help`` stays fast.
+
+Errors: :class:`~workbench.errors.InputError` -> one line, exit 2;
+:class:`~workbench.errors.SolveError` -> one line, exit 3; Ctrl-C -> exit
+130; anything else -> one line naming the exception, exit 1. ``--debug``
+adds the traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import logging
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .. import __version__
+from ..errors import WorkbenchError
+from ..io import to_jsonable
+
+COMMANDS = ["analytic", "mesh", "modes", "reduce", "frf", "study", "report"]
+
+log = logging.getLogger("workbench.cli")
+
+
+@dataclass
+class Context:
+    """What every command receives besides its own options."""
+
+    out: Path | None
+    json: bool
+    debug: bool
+    timings: dict[str, float] = field(default_factory=dict)
+
+    def out_dir(self, default: str) -> Path:
+        """The output folder (``--out`` or ``default``), created."""
+        p = self.out if self.out is not None else Path(default)
+        p.mkdir(parents=True, exist_ok=True)
+        return p
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with one-line errors and exit code 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        sys.stderr.write(f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+        sys.exit(2)
+
+
+def _common(suppress: bool) -> argparse.ArgumentParser:
+    d = (lambda v: argparse.SUPPRESS) if suppress else (lambda v: v)
+    p = argparse.ArgumentParser(add_help=False)
+    g = p.add_argument_group("common options")
+    g.add_argument("--json", action="store_true", default=d(False),
+                   help="print a machine-readable summary on stdout (logs go to stderr)")
+    g.add_argument("--out", type=Path, metavar="DIR", default=d(None),
+                   help="folder for the files this command writes")
+    g.add_argument("-v", "--verbose", action="count", default=d(0), help="more log messages")
+    g.add_argument("-q", "--quiet", action="count", default=d(0),
+                   help="only warnings and errors; no progress bars")
+    g.add_argument("--debug", action="store_true", default=d(False),
+                   help="show the traceback of an error")
+    return p
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="upd",
+        description="Under-platform damper workbench: analytic cone kinematics, gmsh meshes, "
+        "dolfinx/SLEPc Craig-Bampton models, multi-harmonic balance with 3-D friction "
+        "contact, damper studies and reports.",
+        parents=[_common(False)],
+        epilog="Run `upd <command> --help` for the options of a command.",
+    )
+    parser.add_argument("--version", action="version", version=f"upd-workbench {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="<command>", parser_class=_Parser)
+    for name in COMMANDS:
+        try:
+            mod = importlib.import_module(f"workbench.cli.cmd_{name}")
+        except ModuleNotFoundError as e:
+            if e.name == f"workbench.cli.cmd_{name}":
+                continue  # not built yet
+            raise
+        p = sub.add_parser(
+            name, help=mod.HELP, description=getattr(mod, "DESCRIPTION", mod.HELP),
+            parents=[_common(True)], formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
+        mod.add_arguments(p)
+        p.set_defaults(_run=mod.run)
+    return parser
+
+
+def _human(summary: dict[str, Any], indent: str = "") -> str:
+    lines = []
+    for k, v in summary.items():
+        if isinstance(v, dict):
+            lines.append(f"{indent}{k}:")
+            lines.append(_human(v, indent + "  "))
+        elif isinstance(v, list) and v and isinstance(v[0], dict):
+            lines.append(f"{indent}{k}: ({len(v)} rows)")
+            for row in v:
+                lines.append(indent + "  - " + ", ".join(f"{a}={_fmt(b)}" for a, b in row.items()))
+        else:
+            lines.append(f"{indent}{k}: {_fmt(v)}")
+    return "\n".join(lines)
+
+
+def _fmt(v: Any) -> str:
+    if isinstance(v, float):
+        return f"{v:.6g}"
+    if isinstance(v, list) and len(v) > 12:
+        return "[" + ", ".join(_fmt(x) for x in v[:12]) + f", ... ({len(v)} values)]"
+    if isinstance(v, list):
+        return "[" + ", ".join(_fmt(x) for x in v) + "]"
+    return str(v)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "_run", None):
+        parser.print_help(sys.stderr)
+        return 2
+    from .. import log as wlog
+
+    wlog.setup(args.verbose - args.quiet)
+    ctx = Context(out=args.out, json=args.json, debug=args.debug)
+    prog = f"upd {args.command}"
+    t0 = time.perf_counter()
+    try:
+        summary = args._run(args, ctx)
+    except WorkbenchError as e:
+        if args.debug:
+            log.exception("failed")
+        sys.stderr.write(f"{prog}: error: {e}\n")
+        return e.exit_code
+    except KeyboardInterrupt:
+        sys.stderr.write(f"{prog}: interrupted; finished work is kept, run again to resume\n")
+        return 130
+    except Exception as e:  # noqa: BLE001 - the CLI reports every failure in one line
+        if args.debug:
+            log.exception("failed")
+        sys.stderr.write(
+            f"{prog}: internal error: {type(e).__name__}: {e} (rerun with --debug for the traceback)\n"
+        )
+        return 1
+    if summary is None:
+        summary = {}
+    summary.setdefault("wall_s", round(time.perf_counter() - t0, 3))
+    if args.json:
+        sys.stdout.write(json.dumps(summary, indent=2, default=to_jsonable) + "\n")
+    else:
+        sys.stdout.write(_human(json.loads(json.dumps(summary, default=to_jsonable))) + "\n")
+    return 0
+
+
+def num(text: str) -> float | str:
+    """argparse ``type`` for numbers: a float if it parses, else the text.
+
+    Range and type checks happen in the library, which names the parameter
+    and the allowed range; this keeps one message for the CLI and the API.
+    """
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+if __name__ == "__main__":
+    sys.exit(main())
