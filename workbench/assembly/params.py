@@ -1,0 +1,55 @@
+"""Contact parameters shared by the FE stage (stuck springs) and the studies.
+
+Stiffnesses and preload are given per unit of contact extent, as in the
+study of the conical damper: per metre of contact line for the cone and
+cylinder, per square metre of contact face for the wedge. A pair's own
+value is the per-unit value times its tributary weight
+(``ContactSet.weight``: a length or an area).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..config import load_record, param, read_toml
+
+DEFAULT_FILE = Path(__file__).resolve().parents[2] / "geometry" / "contact.toml"
+
+
+@dataclass(frozen=True)
+class ContactParams:
+    """Friction contact parameters (file keys carry their units)."""
+
+    mu: float = param(0.5, "friction coefficient", lo=0.0, hi=2.0)
+    kt_line_n_per_m2: float = param(
+        5.0e8, "tangential stiffness per metre of contact line (cone, cylinder), N/m per m",
+        lo=0.0, lo_open=True)
+    kn_line_n_per_m2: float = param(
+        5.0e8, "normal stiffness per metre of contact line (cone, cylinder), N/m per m",
+        lo=0.0, lo_open=True)
+    kt_face_n_per_m3: float = param(
+        5.0e10, "tangential stiffness per square metre of contact face (wedge), N/m per m^2",
+        lo=0.0, lo_open=True)
+    kn_face_n_per_m3: float = param(
+        5.0e10, "normal stiffness per square metre of contact face (wedge), N/m per m^2",
+        lo=0.0, lo_open=True)
+    cf_n: float = param(300.0, "centrifugal force on the damper (radial, +z), N", lo=0.0)
+
+    def pair_stiffness(self, kind: str, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(kt, kn) in N/m for each pair of a ContactSet of ``kind`` with ``weight``."""
+        w = np.asarray(weight, dtype=float)
+        if kind == "line":
+            return self.kt_line_n_per_m2 * w, self.kn_line_n_per_m2 * w
+        if kind == "face":
+            return self.kt_face_n_per_m3 * w, self.kn_face_n_per_m3 * w
+        raise ValueError(f"{kind=} is not 'line' or 'face'")
+
+
+def load_contact_params(path: str | Path | None = None, **overrides: float) -> ContactParams:
+    """Contact parameters from ``[contact]`` of a TOML file (default geometry/contact.toml)."""
+    data = read_toml(path or DEFAULT_FILE).get("contact", {}) if (path or DEFAULT_FILE.is_file()) else {}
+    data.update({k: v for k, v in overrides.items() if v is not None})
+    return load_record(ContactParams, data, "contact.")
