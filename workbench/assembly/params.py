@@ -50,6 +50,7 @@ class ContactParams:
 
 def load_contact_params(path: str | Path | None = None, **overrides: float) -> ContactParams:
     """Contact parameters from ``[contact]`` of a TOML file (default geometry/contact.toml)."""
-    data = read_toml(path or DEFAULT_FILE).get("contact", {}) if (path or DEFAULT_FILE.is_file()) else {}
+    source = path or (DEFAULT_FILE if DEFAULT_FILE.is_file() else None)
+    data = read_toml(source).get("contact", {}) if source else {}
     data.update({k: v for k, v in overrides.items() if v is not None})
     return load_record(ContactParams, data, "contact.")

@@ -157,7 +157,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.debug:
             log.exception("failed")
         sys.stderr.write(
-            f"{prog}: internal error: {type(e).__name__}: {e} (rerun with --debug for the traceback)\n"
+            f"{prog}: internal error: {type(e).__name__}: {e} "
+            "(rerun with --debug for the traceback)\n"
         )
         return 1
     if summary is None:
