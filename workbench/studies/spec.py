@@ -1,0 +1,286 @@
+"""The study specification: one record, filled from defaults, a TOML file and the CLI.
+
+Every option has one name used in three places: the TOML key
+(``mesh-size = 4.0``), the command-line flag (``--mesh-size 4``) and, with
+dashes as underscores, the :class:`StudySpec` attribute (``spec.mesh_size``).
+Precedence: built-in default < study file < command line. Lists are TOML
+arrays or comma-separated on the command line (``--forces 9.6,30``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..config import read_toml
+from ..errors import InputError, check_choice, check_int, check_range, did_you_mean
+
+DAMPERS = ("cone", "cylinder", "wedge")
+KINDS = ("comparison", "sweep", "fidelity", "robustness")
+
+
+@dataclass(frozen=True)
+class Option:
+    """One study option: its name, type, default, help and allowed values."""
+
+    name: str  # dashed, e.g. "mesh-size"
+    kind: str  # "float", "int", "bool", "str", "floats", "ints", "strs", "path"
+    default: Any
+    help: str
+    group: str
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    choices: tuple[str, ...] | None = None
+    optional: bool = False  # None allowed ("use the geometry/contact file's value")
+
+    @property
+    def attr(self) -> str:
+        return self.name.replace("-", "_")
+
+
+OPTIONS: tuple[Option, ...] = (
+    # what to compute
+    Option("name", "str", "study", "a name for the study (report title, file names)", "study"),
+    Option("kind", "str", "comparison", "what the report shows: " + ", ".join(KINDS), "study",
+           choices=KINDS),
+    Option("dampers", "strs", list(DAMPERS), "dampers to compare", "cases", choices=DAMPERS),
+    Option("phases", "floats", [0.0, 180.0],
+           "inter-blade phase angles, deg (0 in-phase, 180 out-of-phase)", "cases",
+           lo=-360.0, hi=360.0),
+    Option("forces", "floats", [0.096, 3.84, 9.6, 15.0, 20.0, 25.0, 30.0],
+           "excitation force amplitudes on each blade, N", "cases", lo=0.0, lo_open=True),
+    Option("response-blade", "int", 1, "blade whose response is reported (1 or 2)", "cases",
+           lo=1, hi=2),
+    # frequency band
+    Option("band-in-phase", "floats", [], "band of the in-phase family [lo, hi], Hz "
+           "(empty: automatic from the linear stuck and sliding limits)", "band", lo=0.0,
+           lo_open=True),
+    Option("band-out-of-phase", "floats", [], "band of the out-of-phase family [lo, hi], Hz "
+           "(empty: automatic)", "band", lo=0.0, lo_open=True),
+    Option("band-margin", "float", 0.04, "automatic band: relative margin beyond the linear "
+           "limits", "band", lo=0.0, lo_open=True, hi=0.5),
+    # contact and loads (None: geometry/contact.toml)
+    Option("mu", "float", None, "friction coefficient", "contact", lo=0.0, hi=2.0, optional=True),
+    Option("cf", "float", None, "centrifugal force on the damper, N", "contact", lo=0.0,
+           lo_open=True, optional=True),
+    Option("kt-line", "float", None, "tangential stiffness per metre of line (cone, cylinder), "
+           "N/m per m", "contact", lo=0.0, lo_open=True, optional=True),
+    Option("kn-line", "float", None, "normal stiffness per metre of line, N/m per m", "contact",
+           lo=0.0, lo_open=True, optional=True),
+    Option("kt-face", "float", None, "tangential stiffness per m^2 of face (wedge), N/m per m^2",
+           "contact", lo=0.0, lo_open=True, optional=True),
+    Option("kn-face", "float", None, "normal stiffness per m^2 of face (wedge), N/m per m^2",
+           "contact", lo=0.0, lo_open=True, optional=True),
+    Option("damping", "float", 0.002, "modal damping ratio of the assembly (stuck contacts)",
+           "contact", lo=0.0, hi=0.5),
+    # modelling knobs (fidelity)
+    Option("mesh-size", "float", None, "global mesh size, mm (None: the geometry file's)",
+           "fidelity", lo=0.0, lo_open=True, optional=True),
+    Option("modes", "int", 12, "fixed-interface modes per body (Craig-Bampton)", "fidelity",
+           lo=0, hi=400),
+    Option("rigid-damper", "bool", False, "rigid 6-DOF damper instead of Craig-Bampton",
+           "fidelity"),
+    Option("points-per-line", "int", None, "contact points per line (cone, cylinder)",
+           "fidelity", lo=2, hi=400, optional=True),
+    Option("harmonics", "ints", [0, 1, 2, 3], "harmonics of the balance", "fidelity", lo=0,
+           hi=64),
+    Option("nt", "int", None, "AFT time samples per period (None: solver default)", "fidelity",
+           lo=4, hi=8192, optional=True),
+    # geometry
+    Option("geometry", "path", None, "TOML overriding geometry tables (rig, cone, ...)",
+           "geometry", optional=True),
+    Option("cone-angle", "float", None, "cone semi-angle, deg (None: cone.toml's)", "geometry",
+           lo=0.0, lo_open=True, hi=89.0, optional=True),
+    # solver
+    Option("max-points", "int", 400, "largest number of continuation points per curve",
+           "solver", lo=5, hi=100000),
+    Option("stability", "bool", True, "Hill stability of every point", "solver"),
+    # sweeps and the fidelity/robustness studies
+    Option("sweep", "str", None, "name of a scalar option to sweep (e.g. cf, cone-angle, mu)",
+           "sweep", optional=True),
+    Option("sweep-values", "floats", [], "values of the swept option", "sweep"),
+    Option("tolerance", "float", None, "accepted error, percent: pick the cheapest settings "
+           "meeting it (fidelity studies)", "fidelity", lo=0.0, lo_open=True, hi=100.0,
+           optional=True),
+)
+
+BY_NAME = {o.name: o for o in OPTIONS}
+
+
+def _fields() -> list[tuple[str, Any, Any]]:
+    out = []
+    for o in OPTIONS:
+        default = dataclasses.field(default_factory=lambda d=o.default: list(d)) \
+            if isinstance(o.default, list) else o.default
+        out.append((o.attr, Any, default))
+    return out
+
+
+_Base = dataclasses.make_dataclass("_Base", _fields(), frozen=True)
+
+
+class StudySpec(_Base):  # type: ignore[misc, valid-type]
+    """The resolved options of a study (attributes: option names with underscores)."""
+
+    source: dict[str, str]  # option name -> "default" | file path | "command line"
+
+    def as_dict(self) -> dict[str, Any]:
+        """Option name -> value (dashed names, JSON-able)."""
+        return {o.name: _jsonable(getattr(self, o.attr)) for o in OPTIONS}
+
+    def replace(self, **changes: Any) -> StudySpec:
+        spec = dataclasses.replace(self, **changes)
+        object.__setattr__(spec, "source", dict(self.source))
+        return spec
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, Path):
+        return str(v)
+    if isinstance(v, tuple):
+        return list(v)
+    return v
+
+
+def _split(text: Any) -> list[Any]:
+    if isinstance(text, (list, tuple)):
+        return list(text)
+    if isinstance(text, str):
+        return [t for t in (s.strip() for s in text.split(",")) if t]
+    return [text]
+
+
+def check_option(o: Option, value: Any) -> Any:
+    """Check and convert one value for option ``o``; InputError names the option."""
+    if value is None:
+        if o.optional:
+            return None
+        raise InputError(o.name, value, f"a value ({o.help})")
+    k = o.kind
+    if k == "float":
+        return check_range(o.name, value, o.lo, o.hi, lo_open=o.lo_open)
+    if k == "int":
+        return check_int(o.name, value, None if o.lo is None else int(o.lo),
+                         None if o.hi is None else int(o.hi))
+    if k == "bool":
+        if isinstance(value, bool):
+            return value
+        if isinstance(value, str) and value.lower() in ("true", "yes", "1", "false", "no", "0"):
+            return value.lower() in ("true", "yes", "1")
+        raise InputError(o.name, value, "true or false")
+    if k == "str":
+        if not isinstance(value, str):
+            raise InputError(o.name, value, "a string")
+        return check_choice(o.name, value, o.choices) if o.choices else value
+    if k == "path":
+        p = Path(str(value))
+        if not p.is_file():
+            raise InputError(o.name, str(value), "an existing file")
+        return p
+    if k in ("floats", "ints", "strs"):
+        items = _split(value)
+        out = []
+        for i, v in enumerate(items):
+            sub = dataclasses.replace(o, name=f"{o.name}[{i}]", kind=k[:-1], optional=False)
+            out.append(check_option(sub, v))
+        if k == "strs" and len(set(out)) != len(out):
+            raise InputError(o.name, items, "distinct values")
+        return out
+    raise AssertionError(k)
+
+
+def resolve(file_values: Mapping[str, Any] | None = None, file_name: str = "",
+            cli_values: Mapping[str, Any] | None = None) -> StudySpec:
+    """Merge defaults, a study file's values and command-line values into a spec."""
+    values: dict[str, Any] = {}
+    source: dict[str, str] = {}
+    for o in OPTIONS:
+        values[o.attr] = o.default if not isinstance(o.default, list) else list(o.default)
+        source[o.name] = "default"
+    for origin, given in ((file_name or "study file", file_values or {}),
+                          ("command line", cli_values or {})):
+        for key, v in given.items():
+            if key not in BY_NAME:
+                hint = did_you_mean(key, BY_NAME)
+                raise InputError(key, v, "a study option (see upd study --help)",
+                                 ("unknown key" + (f"; {hint}" if hint else "")) + f" in {origin}")
+            o = BY_NAME[key]
+            values[o.attr] = check_option(o, v)
+            source[key] = origin
+    spec = StudySpec(**values)
+    object.__setattr__(spec, "source", source)
+    _check_consistency(spec)
+    return spec
+
+
+def _check_consistency(spec: StudySpec) -> None:
+    for name in ("band-in-phase", "band-out-of-phase"):
+        band = getattr(spec, name.replace("-", "_"))
+        if band and (len(band) != 2 or band[0] >= band[1]):
+            raise InputError(name, band, "[] (automatic) or [lo, hi] with lo < hi, Hz")
+    if not spec.forces:
+        raise InputError("forces", spec.forces, "at least one force, N")
+    if not spec.phases:
+        raise InputError("phases", spec.phases, "at least one phase angle, deg")
+    if not spec.dampers:
+        raise InputError("dampers", spec.dampers, "at least one of " + ", ".join(DAMPERS))
+    if 1 not in spec.harmonics:
+        raise InputError("harmonics", spec.harmonics, "a list containing 1 (the excitation)")
+    if len(set(spec.harmonics)) != len(spec.harmonics):
+        raise InputError("harmonics", spec.harmonics, "distinct harmonics")
+    if spec.sweep is not None:
+        if spec.sweep not in BY_NAME or BY_NAME[spec.sweep].kind not in ("float", "int"):
+            scalars = [o.name for o in OPTIONS if o.kind in ("float", "int")]
+            raise InputError("sweep", spec.sweep, "a numeric option: " + ", ".join(scalars),
+                             did_you_mean(spec.sweep, scalars))
+        if not spec.sweep_values:
+            raise InputError("sweep-values", spec.sweep_values, "at least one value")
+        for i, v in enumerate(spec.sweep_values):
+            check_option(dataclasses.replace(BY_NAME[spec.sweep], name=f"sweep-values[{i}]"), v)
+
+
+def load_study(path: str | Path | None, cli_values: Mapping[str, Any] | None = None) -> StudySpec:
+    """Read a study file (or only defaults when ``path`` is None) and apply CLI values."""
+    file_values = read_toml(path) if path is not None else {}
+    for key, v in file_values.items():
+        if isinstance(v, dict):
+            raise InputError(key, f"[{key}] table", "top-level keys named like the "
+                             "upd study options (no tables)")
+    return resolve(file_values, str(path) if path else "", cli_values)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add every study option to ``upd study`` (values stay raw; checked by resolve)."""
+    groups: dict[str, Any] = {}
+    for o in OPTIONS:
+        g = groups.setdefault(o.group, parser.add_argument_group(f"{o.group} options"))
+        default = "" if o.default in (None, []) else f" [default: {_fmt_default(o.default)}]"
+        if o.kind == "bool":
+            g.add_argument(f"--{o.name}", dest=o.attr, default=argparse.SUPPRESS,
+                           action=argparse.BooleanOptionalAction, help=o.help + default)
+        else:
+            g.add_argument(f"--{o.name}", dest=o.attr, default=argparse.SUPPRESS,
+                           metavar=_metavar(o), help=o.help + default)
+
+
+def _metavar(o: Option) -> str:
+    return {"floats": "X,Y,...", "ints": "I,J,...", "strs": "A,B,...", "float": "X",
+            "int": "N", "path": "FILE", "str": "TEXT"}[o.kind]
+
+
+def _fmt_default(v: Any) -> str:
+    return ",".join(map(str, v)) if isinstance(v, list) else str(v)
+
+
+def cli_values(args: argparse.Namespace) -> dict[str, Any]:
+    """The study options given on the command line (dashed names -> raw values)."""
+    return {o.name: getattr(args, o.attr) for o in OPTIONS if hasattr(args, o.attr)}
+
+
+def sequence_of(spec: StudySpec, name: str) -> Sequence[Any]:
+    return getattr(spec, name.replace("-", "_"))
