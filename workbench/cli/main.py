@@ -164,6 +164,8 @@ def main(argv: list[str] | None = None) -> int:
     if summary is None:
         summary = {}
     summary.setdefault("wall_s", round(time.perf_counter() - t0, 3))
+    if wlog.mpi_rank() != 0:
+        return 0  # under mpirun the summary is printed once, by rank 0
     if args.json:
         sys.stdout.write(json.dumps(summary, indent=2, default=to_jsonable) + "\n")
     else:

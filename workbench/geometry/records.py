@@ -28,6 +28,14 @@ Within a side: along the line from the large end to the small end (cone; as
 in the paper, points 1 and 24 at the large section), from -y to +y
 (cylinder); for the wedge a row-major grid, ``n_y`` along y (fast index)
 times ``n_s`` rows up the slope.
+
+The wedge grid is staggered: row 0 (the lowest) has ``n_y`` points, the
+rows alternate ``n_y`` and ``n_y - 1`` points, the short rows sitting
+between the points of the full rows (default 5 rows of 15/14/15/14/15 = 73
+per face, 146 pairs, as in the paper). Points sit at the middles of equal
+segments (lines) or strips (faces); ``weight`` is each point's tributary
+length or area (its nearest-point cell), summing per side to the line
+length or face area.
 """
 
 from __future__ import annotations
