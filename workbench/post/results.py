@@ -1,0 +1,260 @@
+"""The results of a study: one frequency-response branch per case, plus what frames it.
+
+A *case* is one damper, one inter-blade phase angle, one excitation level
+and one set of modelling knobs (its ``variant`` label; "" for the study's
+base settings). Its :class:`~workbench.hbm.branch.Branch` holds the curve
+(frequency, response amplitude, stability, contact status and friction
+energy of every pair at every point).
+
+Units: the branch is SI (m, J); the accessors here convert to the units
+the study reports in: amplitude in mm, energy per cycle in mJ, frequency
+in Hz, force in N.
+
+Status codes of a contact pair over one period::
+
+    0 stuck            never slips, never separates
+    1 stick-slip       slips during part of the period, never separates
+    2 partial sep.     separates during part of the period
+    3 full separation  open during the whole period
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..hbm.branch import Branch
+from ..io import atomic_path
+
+STATUS_NAMES = ("stuck", "stick-slip", "partial separation", "full separation")
+STATUS_KEYS = ("stuck", "stick_slip", "partial_separation", "full_separation")
+
+
+def family_name(phase_deg: float) -> str:
+    """'in-phase' (0 deg), 'out-of-phase' (180 deg) or 'phase N deg'."""
+    p = float(phase_deg) % 360.0
+    if abs(p) < 1e-9 or abs(p - 360.0) < 1e-9:
+        return "in-phase"
+    if abs(p - 180.0) < 1e-9:
+        return "out-of-phase"
+    return f"phase {p:g} deg"
+
+
+@dataclass
+class CaseResult:
+    """One computed case and its frame (damper, phase, force, knobs, contact layout)."""
+
+    damper: str
+    phase_deg: float
+    force_n: float
+    branch: Branch
+    points: np.ndarray  # (n_pairs, 3) m, contact pair coordinates
+    side: np.ndarray  # (n_pairs,) 0/1
+    variant: str = ""  # "" for the base settings, else e.g. "modes=24"
+    params: dict[str, Any] = field(default_factory=dict)  # the case's canonical parameters
+    digest: str = ""
+    timings: dict[str, float] = field(default_factory=dict)  # stage -> s (incl. shared stages)
+    output: int = 0  # index of the reported output in the branch
+
+    @property
+    def case_id(self) -> str:
+        v = f"-{self.variant}" if self.variant else ""
+        return f"{self.damper}-{self.phase_deg:g}deg-{self.force_n:g}N{v}".replace("=", "")
+
+    @property
+    def family(self) -> str:
+        return family_name(self.phase_deg)
+
+    # ---- curves in report units
+    @property
+    def freq_hz(self) -> np.ndarray:
+        return self.branch.freq_hz
+
+    @property
+    def amp_mm(self) -> np.ndarray:
+        """Largest response displacement over the period at each point, mm."""
+        return self.branch.out_amp[:, self.output] * 1e3
+
+    @property
+    def receptance_mm_per_n(self) -> np.ndarray:
+        return self.amp_mm / self.force_n
+
+    @property
+    def stable(self) -> np.ndarray:
+        return self.branch.stable
+
+    @property
+    def peak_index(self) -> int:
+        return self.branch.peak(self.output)
+
+    @property
+    def energy_mj(self) -> np.ndarray:
+        """(n_points, n_pairs) friction energy per cycle of every pair, mJ."""
+        return self.branch.friction_energy * 1e3
+
+    def status_shares(self, i: int | None = None) -> dict[str, float]:
+        """Fraction of pairs in each status at point ``i`` (default: the resonance peak)."""
+        i = self.peak_index if i is None else i
+        if i < 0:
+            return {k: float("nan") for k in STATUS_KEYS}
+        counts = np.bincount(self.branch.status[i].astype(int), minlength=4)[:4]
+        total = max(1, int(counts.sum()))
+        return {k: float(c) / total for k, c in zip(STATUS_KEYS, counts, strict=True)}
+
+    def summary(self) -> dict[str, Any]:
+        """The per-case numbers of the study's JSON summary and tables."""
+        i = self.peak_index
+        ok = i >= 0
+        out = {
+            "case": self.case_id, "damper": self.damper, "phase_deg": self.phase_deg,
+            "family": self.family, "force_n": self.force_n, "variant": self.variant,
+            "peak_frequency_hz": float(self.freq_hz[i]) if ok else None,
+            "peak_amplitude_mm": float(self.amp_mm[i]) if ok else None,
+            "friction_energy_mj": float(self.energy_mj[i].sum()) if ok else None,
+            "peak_stable": bool(self.stable[i]) if ok else None,
+            "n_points": self.branch.n_points,
+            "n_unstable": int(np.sum(~self.stable)),
+            "energy_residual_max": float(np.max(self.branch.energy_residual)) if ok else None,
+            "completed": bool(self.branch.completed),
+            "message": self.branch.message,
+            "wall_s": round(float(self.timings.get("hbm", self.branch.timings.get("total", 0.0))),
+                            3),
+        }
+        out.update({f"share_{k}": v for k, v in self.status_shares().items()})
+        return out
+
+    # ---- storage
+    def save(self, path: str | Path) -> Path:
+        """Write the case (its branch plus frame) to one HDF5 file atomically."""
+        import h5py
+
+        path = Path(path)
+        self.branch.save(path)
+        with atomic_path(path) as tmp:
+            import shutil
+
+            shutil.copyfile(path, tmp)
+            with h5py.File(tmp, "a") as h:
+                g = h.require_group("case")
+                g["points"] = self.points
+                g["side"] = self.side
+                a = g.attrs
+                a["damper"], a["phase_deg"] = self.damper, self.phase_deg
+                a["force_n"] = self.force_n
+                a["variant"], a["digest"], a["output"] = self.variant, self.digest, self.output
+                a["params"] = json.dumps(self.params, default=str, sort_keys=True)
+                a["timings"] = json.dumps(self.timings)
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> CaseResult:
+        import h5py
+
+        branch = Branch.load(path)
+        with h5py.File(path, "r") as h:
+            g = h["case"]
+            a = g.attrs
+            return cls(
+                damper=str(a["damper"]), phase_deg=float(a["phase_deg"]),
+                force_n=float(a["force_n"]), branch=branch, points=g["points"][()],
+                side=g["side"][()], variant=str(a["variant"]), digest=str(a["digest"]),
+                output=int(a["output"]), params=json.loads(a["params"]),
+                timings=json.loads(a["timings"]),
+            )
+
+
+@dataclass
+class StudyResults:
+    """Every case of a study, in plan order, and what the study computed besides them."""
+
+    name: str
+    kind: str
+    cases: list[CaseResult]
+    inputs: dict[str, Any] = field(default_factory=dict)
+    extras: dict[str, Any] = field(default_factory=dict)  # e.g. linear frequencies per damper
+    timings: dict[str, float] = field(default_factory=dict)
+
+    def select(self, *, damper: str | None = None, phase_deg: float | None = None,
+               force_n: float | None = None, variant: str | None = None) -> list[CaseResult]:
+        """The cases matching every given key (floats compared to 1e-9)."""
+        out = []
+        for c in self.cases:
+            if damper is not None and c.damper != damper:
+                continue
+            if phase_deg is not None and abs(c.phase_deg - phase_deg) > 1e-9:
+                continue
+            if force_n is not None and abs(c.force_n - force_n) > 1e-9:
+                continue
+            if variant is not None and c.variant != variant:
+                continue
+            out.append(c)
+        return out
+
+    @property
+    def dampers(self) -> list[str]:
+        return list(dict.fromkeys(c.damper for c in self.cases))
+
+    @property
+    def phases(self) -> list[float]:
+        return list(dict.fromkeys(c.phase_deg for c in self.cases))
+
+    @property
+    def forces(self) -> list[float]:
+        return sorted(set(c.force_n for c in self.cases))
+
+    def summaries(self) -> list[dict[str, Any]]:
+        return [c.summary() for c in self.cases]
+
+    def save(self, path: str | Path) -> Path:
+        """All cases in one HDF5 file: /cases/<case_id>/... plus attributes."""
+        import tempfile
+
+        import h5py
+
+        path = Path(path)
+        with tempfile.TemporaryDirectory() as scratch, atomic_path(path) as tmp, \
+                h5py.File(tmp, "w") as h:
+            h.attrs["name"], h.attrs["kind"] = self.name, self.kind
+            h.attrs["inputs"] = json.dumps(self.inputs, default=str)
+            h.attrs["extras"] = json.dumps(self.extras, default=_np_default)
+            h.attrs["timings"] = json.dumps(self.timings)
+            h.attrs["order"] = json.dumps([c.case_id for c in self.cases])
+            for k, c in enumerate(self.cases):
+                one = c.save(Path(scratch) / f"{k}.h5")
+                with h5py.File(one, "r") as src:
+                    src.copy(src["/"], h, name=f"cases/{c.case_id}")
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> StudyResults:
+        """Read a file written by :meth:`save`."""
+        import tempfile
+
+        import h5py
+
+        cases = []
+        with h5py.File(path, "r") as h, tempfile.TemporaryDirectory() as scratch:
+            a = h.attrs
+            for k, cid in enumerate(json.loads(a["order"])):
+                one = Path(scratch) / f"{k}.h5"
+                with h5py.File(one, "w") as dst:
+                    for name in h[f"cases/{cid}"]:
+                        h.copy(h[f"cases/{cid}/{name}"], dst, name=name)
+                    for key, val in h[f"cases/{cid}"].attrs.items():
+                        dst.attrs[key] = val
+                cases.append(CaseResult.load(one))
+            return cls(name=str(a["name"]), kind=str(a["kind"]), cases=cases,
+                       inputs=json.loads(a["inputs"]), extras=json.loads(a["extras"]),
+                       timings=json.loads(a["timings"]))
+
+
+def _np_default(o: Any) -> Any:
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.generic):
+        return o.item()
+    return str(o)
