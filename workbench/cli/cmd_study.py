@@ -1,0 +1,47 @@
+"""``upd study``: run a study file (damper comparison, sweeps, fidelity, robustness)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "run a study file: cases, cached results, figures and the HTML report"
+DESCRIPTION = """Run a study: every damper x inter-blade phase x excitation level (x swept
+value) as a harmonic balance frequency response of the rig + damper model.
+
+The study file's keys are the options below (without --); options given on
+the command line override the file. Finished cases are cached under a hash
+of their parameters in DIR/cache, so an interrupted study resumes where it
+stopped; --force recomputes. Under `mpirun -n N` the cases are spread over
+the ranks. The run ends with DIR/report.html.
+
+examples:
+  upd study studies/paper.toml --out results/paper
+  upd study studies/paper.toml --dampers cone --forces 9.6,30 --out results/cone
+  mpirun -n 2 --allow-run-as-root --oversubscribe upd study studies/paper.toml"""
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from ..studies.spec import add_arguments as add_study_options
+
+    p.add_argument("file", nargs="?", type=Path, metavar="FILE",
+                   help="study file (TOML); without it the built-in defaults are used")
+    p.add_argument("--force", action="store_true", help="recompute every case, ignore caches")
+    add_study_options(p)
+
+
+def run(args: argparse.Namespace, ctx) -> dict:
+    from ..studies.runner import check_failures, run_study
+    from ..studies.spec import cli_values, load_study
+
+    spec = load_study(args.file, cli_values(args))
+    out = ctx.out_dir(f"results/{spec.name}")
+    results = run_study(spec, out, force=args.force)
+    summary = {
+        "study": spec.name, "kind": spec.kind, "out": str(out),
+        "report": str(out / "report.html"), "n_cases": len(results.cases),
+        "timings_s": {k: round(v, 2) for k, v in results.timings.items()},
+        "cases": results.summaries(),
+    }
+    check_failures(results)
+    return summary

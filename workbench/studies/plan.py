@@ -1,0 +1,73 @@
+"""From a study spec to a list of cases, each with the canonical parameters that key its cache.
+
+A case's parameters split into the *model* part (geometry, mesh, reduction,
+contact, damping: everything the linear model and contact layout depend
+on) and the *solve* part (phase, force, band, harmonics, samples, solver
+options). Cases sharing a model part share the meshing and the reduction.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..io import digest
+from .spec import StudySpec
+
+MODEL_KEYS = (
+    "mu", "cf", "kt-line", "kn-line", "kt-face", "kn-face", "damping", "mesh-size", "modes",
+    "rigid-damper", "points-per-line", "geometry", "cone-angle",
+)
+SOLVE_KEYS = ("harmonics", "nt", "max-points", "stability", "response-blade", "band-margin",
+              "band-in-phase", "band-out-of-phase")
+
+
+@dataclass(frozen=True)
+class Case:
+    """One unit of work: a damper, a phase, a force and every setting that shapes its answer."""
+
+    damper: str
+    phase_deg: float
+    force_n: float
+    settings: dict[str, Any]  # option name -> value (the spec, with this case's overrides)
+    variant: str = ""
+    model_digest: str = field(default="", compare=False)
+    digest: str = field(default="", compare=False)
+
+    @property
+    def name(self) -> str:
+        v = f" [{self.variant}]" if self.variant else ""
+        return f"{self.damper} {self.phase_deg:g} deg {self.force_n:g} N{v}"
+
+    def model_params(self) -> dict[str, Any]:
+        return {"damper": self.damper, **{k: self.settings[k] for k in MODEL_KEYS}}
+
+    def solve_params(self) -> dict[str, Any]:
+        return {"phase_deg": self.phase_deg, "force_n": self.force_n,
+                **{k: self.settings[k] for k in SOLVE_KEYS}}
+
+
+def make_case(damper: str, phase: float, force: float, settings: dict[str, Any],
+              variant: str = "") -> Case:
+    c = Case(damper, float(phase), float(force), dict(settings), variant)
+    md = digest(c.model_params())
+    object.__setattr__(c, "model_digest", md)
+    object.__setattr__(c, "digest", digest({"model": md, "solve": c.solve_params()}))
+    return c
+
+
+def plan(spec: StudySpec) -> list[Case]:
+    """The cases of a comparison or a sweep study, in a stable order."""
+    base = spec.as_dict()
+    cases: list[Case] = []
+    if spec.kind == "sweep" and spec.sweep is not None:
+        for value, damper, phase, force in itertools.product(
+                spec.sweep_values, spec.dampers, spec.phases, spec.forces):
+            s = dict(base)
+            s[spec.sweep] = value
+            cases.append(make_case(damper, phase, force, s, f"{spec.sweep}={value:g}"))
+    else:
+        for damper, phase, force in itertools.product(spec.dampers, spec.phases, spec.forces):
+            cases.append(make_case(damper, phase, force, base))
+    return cases

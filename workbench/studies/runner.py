@@ -1,0 +1,326 @@
+"""Run a study: models (geometry -> FE reduction -> assembly), then cases, then post.
+
+Folder layout of a study (``out``)::
+
+    out/cache/geometry/<damper>-<digest>/   meshes + geometry.h5 (reused when unchanged)
+    out/cache/fe/                           ReducedModel HDF5 files (reused when unchanged)
+    out/cache/cases/<digest>.h5             one finished case (atomic; the resume unit)
+    out/results.h5                          every case of this study, in plan order
+    out/cases/<case>.csv                    each curve as CSV
+    out/summary.csv, summary.json           one row per case
+    out/figures/, out/tables/               pictures and tables
+    out/manifest.json, out/report.html      the report
+
+A run killed at any moment leaves only whole files behind (every write is
+atomic), so running it again recomputes only the unfinished cases.
+``force=True`` recomputes everything.
+
+MPI: geometry and reduction run on all ranks together (dolfinx in
+parallel); the cases are then spread over the ranks; rank 0 gathers the
+finished case files and writes the results and the report. The answers do
+not depend on the number of ranks.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError, SolveError
+from ..io import digest, write_json, write_text
+from ..log import bars_enabled, progress_bar
+from ..post.results import CaseResult, StudyResults
+from .plan import Case, plan
+from .spec import StudySpec
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class PreparedModel:
+    """Everything the cases of one model share."""
+
+    geometry: Any  # BuiltGeometry
+    geometry_dir: Path
+    assembled: Any  # AssembledModel
+    system: Any  # hbm System
+    bands: dict[float, tuple[float, float, dict[str, float]]]
+    timings: dict[str, float]
+
+
+def _comm():
+    from ..log import mpi_size
+
+    if mpi_size() > 1:
+        from mpi4py import MPI
+
+        return MPI.COMM_WORLD
+    return None
+
+
+def geometry_request(case: Case) -> dict[str, Any]:
+    """build_geometry arguments for a case (overrides from the study options)."""
+    s = case.settings
+    overrides: dict[str, Any] = {}
+    if s.get("points-per-line") is not None and case.damper in ("cone", "cylinder"):
+        overrides.setdefault(case.damper, {})["n_contact_points"] = int(s["points-per-line"])
+    if s.get("cone-angle") is not None and case.damper == "cone":
+        overrides.setdefault("cone", {})["semi_angle_deg"] = float(s["cone-angle"])
+    return {"damper": case.damper, "geometry_file": s.get("geometry"),
+            "size_mm": s.get("mesh-size"), "overrides": overrides or None}
+
+
+def contact_params_for(case: Case):
+    from ..assembly.params import load_contact_params
+
+    s = case.settings
+    return load_contact_params(
+        mu=s.get("mu"), cf_n=s.get("cf"), kt_line_n_per_m2=s.get("kt-line"),
+        kn_line_n_per_m2=s.get("kn-line"), kt_face_n_per_m3=s.get("kt-face"),
+        kn_face_n_per_m3=s.get("kn-face"))
+
+
+def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> PreparedModel:
+    """Mesh, reduce and assemble the model of ``case`` (each stage cached on disk)."""
+    from ..assembly.model import assemble
+    from ..contact.elements import ContactElements
+    from ..fe.reduce import reduce_body
+    from ..geometry import build_geometry
+    from ..hbm.system import System
+    from ..log import stage
+
+    timings: dict[str, float] = {}
+    req = geometry_request(case)
+    gdir = out / "cache" / "geometry" / f"{case.damper}-{digest(req, 10)}"
+    with stage(timings, "geometry"):
+        geom = build_geometry(req["damper"], gdir, geometry_file=req["geometry_file"],
+                              size_mm=req["size_mm"], overrides=req["overrides"])
+    s = case.settings
+    fe_dir = out / "cache" / "fe"
+    with stage(timings, "reduction rig"):
+        rig = reduce_body(geom, "rig", n_modes=s["modes"], cache_dir=fe_dir, comm=comm,
+                          force=force)
+    with stage(timings, "reduction damper"):
+        damper = reduce_body(geom, "damper", n_modes=s["modes"], rigid=s["rigid-damper"],
+                             cache_dir=fe_dir, comm=comm, force=force)
+    with stage(timings, "assembly"):
+        beta = float(geom.params["rig"]["platform"]["angle_deg"])
+        model = assemble(rig, damper, geom.contact, contact_params_for(case), beta_deg=beta,
+                         excitation_direction=tuple(geom.excitation_direction),
+                         response_direction=tuple(geom.response_direction))
+        contacts = ContactElements(W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt,
+                                   kn=model.kn, n0=model.n0)
+        system = System(M=model.M, K=model.K, zeta=s["damping"], contacts=contacts)
+    return PreparedModel(geom, gdir, model, system, {}, timings)
+
+
+def band_for(prep: PreparedModel, case: Case) -> tuple[float, float]:
+    """The case's frequency band: given in the study, or automatic for its family."""
+    s = case.settings
+    fam = case.phase_deg % 360.0
+    given = (s["band-in-phase"] if abs(fam) < 1e-9 else
+             s["band-out-of-phase"] if abs(fam - 180.0) < 1e-9 else [])
+    if given:
+        return float(given[0]), float(given[1])
+    if case.phase_deg not in prep.bands:
+        from ..assembly.linear import auto_band
+
+        prep.bands[case.phase_deg] = auto_band(prep.assembled, case.phase_deg,
+                                               s["band-margin"], s["response-blade"])
+    lo, hi, _ = prep.bands[case.phase_deg]
+    return lo, hi
+
+
+def solve_case(prep: PreparedModel, case: Case) -> CaseResult:
+    """The frequency response of one case (never raises for a failed solve)."""
+    from ..hbm.continuation import frequency_response
+    from ..hbm.options import SolverOptions
+
+    s = case.settings
+    t0 = time.perf_counter()
+    band = band_for(prep, case)
+    model = prep.assembled
+    opts = SolverOptions(stability=s["stability"], max_points=s["max-points"])
+    blade = s["response-blade"]
+    branch = frequency_response(
+        prep.system, model.excitation(case.phase_deg), case.force_n, band,
+        outputs=model.response_dofs[blade - 1: blade], harmonics=tuple(s["harmonics"]),
+        nt=s["nt"], options=opts, output_names=(f"blade{blade}_x",), label=case.name)
+    timings = dict(prep.timings)
+    timings["hbm"] = time.perf_counter() - t0
+    return CaseResult(
+        damper=case.damper, phase_deg=case.phase_deg, force_n=case.force_n, branch=branch,
+        points=model.contact.points, side=model.contact.side, variant=case.variant,
+        params={**case.settings, "band_hz": list(band)}, digest=case.digest, timings=timings)
+
+
+def _cost(case: Case, prepared: dict[str, PreparedModel]) -> float:
+    """A rough relative cost for the ETA and for spreading cases over ranks."""
+    p = prepared.get(case.model_digest)
+    n = 3 * (p.assembled.n_pairs if p else 46) * (2 * len(case.settings["harmonics"]) - 1)
+    return (n / 1000.0) ** 2 + 0.2
+
+
+def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> StudyResults:
+    """Compute every case of ``spec`` (resuming from ``out``) and write results and report."""
+    out = Path(out)
+    comm = _comm()
+    rank = 0 if comm is None else comm.rank
+    size = 1 if comm is None else comm.size
+    cases = plan(spec)
+    if not cases:
+        raise InputError("study", spec.name, "at least one case")
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+    case_dir = out / "cache" / "cases"
+    case_dir.mkdir(parents=True, exist_ok=True)
+
+    # 1. models: every rank takes part (dolfinx is parallel); all are cached on disk
+    prepared: dict[str, PreparedModel] = {}
+    todo = [c for c in cases if force or not _done(case_dir, c)]
+    need_models = list(dict.fromkeys(c.model_digest for c in todo))
+    for md in need_models:
+        c = next(x for x in todo if x.model_digest == md)
+        log.info("model for %s: geometry, reduction, assembly", c.damper)
+        prepared[md] = prepare_model(c, out, force=force, comm=comm)
+        for k, v in prepared[md].timings.items():
+            timings[k] = timings.get(k, 0.0) + v
+
+    # 2. cases: spread over the ranks by estimated cost (largest first)
+    order = sorted(todo, key=lambda c: -_cost(c, prepared))
+    mine = [c for i, c in enumerate(order) if i % size == rank]
+    failures: list[str] = []
+    if todo:
+        log.info("%d of %d cases to compute (%d cached)%s", len(todo), len(cases),
+                 len(cases) - len(todo), f", {len(mine)} on rank {rank}" if size > 1 else "")
+    t_cases = time.perf_counter()
+    total = sum(_cost(c, prepared) for c in mine)
+    with progress_bar(f"{spec.name}: cases", total=round(total, 3), unit="cost") as bar:
+        for k, c in enumerate(mine):
+            bar.set_postfix_str(f"{k + 1}/{len(mine)} {c.name}")
+            res = solve_case(prepared[c.model_digest], c)
+            res.save(case_dir / f"{c.digest}.h5")
+            if res.branch.failed:
+                failures.append(f"{c.name}: {res.branch.message}")
+                log.warning("case %s stopped early: %s (its %d points are kept)", c.name,
+                            res.branch.message, res.branch.n_points)
+            bar.update(_cost(c, prepared))
+            if not bars_enabled():
+                log.info("case %d/%d done: %s (%d points, %.1f s)", k + 1, len(mine), c.name,
+                         res.branch.n_points, res.timings["hbm"])
+    timings["cases (wall)"] = time.perf_counter() - t_cases
+    if comm is not None:
+        failures = sum(comm.allgather(failures), [])
+        comm.Barrier()
+
+    # 3. gather, post-process and report on rank 0
+    results = StudyResults(name=spec.name, kind=spec.kind,
+                           cases=[CaseResult.load(case_dir / f"{c.digest}.h5") for c in cases],
+                           inputs=spec.as_dict())
+    results.timings = timings
+    if rank == 0:
+        t_post = time.perf_counter()
+        results.extras["bands"] = {
+            md: {str(ph): list(b) for ph, b in p.bands.items()} for md, p in prepared.items()}
+        results.extras["failures"] = failures
+        write_outputs(results, spec, out, prepared)
+        timings["post and report"] = time.perf_counter() - t_post
+    timings["total"] = time.perf_counter() - t_start
+    return results
+
+
+def _done(case_dir: Path, c: Case) -> bool:
+    p = case_dir / f"{c.digest}.h5"
+    if not p.is_file():
+        return False
+    try:
+        CaseResult.load(p)
+        return True
+    except Exception:  # noqa: BLE001 - an unreadable cache file is recomputed
+        log.warning("cached case %s is unreadable; recomputing", p.name)
+        return False
+
+
+def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
+                  prepared: dict[str, PreparedModel]) -> None:
+    """results.h5, CSV files, summary, figures, tables, manifest and report."""
+    from ..render.report import write_report
+    from ..versions import software_versions
+
+    results.save(out / "results.h5")
+    for c in results.cases:
+        c.branch.to_csv(out / "cases" / f"{c.case_id}.csv", unit_scale=1e3, unit="mm")
+    rows = results.summaries()
+    write_json(out / "summary.json", rows)
+    if rows:
+        cols = list(rows[0])
+        lines = [",".join(cols)] + [",".join(_csv(r[k]) for k in cols) for r in rows]
+        write_text(out / "summary.csv", "\n".join(lines) + "\n")
+    sections = _sections(results, out)
+    manifest = {
+        "title": f"Study '{spec.name}'", "subtitle": f"{spec.kind} study,",
+        "created": time.strftime("%Y-%m-%d %H:%M:%S"),
+        "summary": headline(results),
+        "inputs": spec.as_dict(), "sources": spec.source,
+        "versions": software_versions(), "timings": results.timings,
+        "sections": sections,
+    }
+    write_json(out / "manifest.json", manifest)
+    write_report(out)
+
+
+def _sections(results: StudyResults, out: Path) -> list[dict]:
+    try:
+        from ..render.sections import build_sections
+    except ImportError:  # the figure module is optional only while it is being built
+        return []
+    return build_sections(results, out, geometry_dirs=_geometry_dirs(out))
+
+
+def _geometry_dirs(out: Path) -> dict[str, Path]:
+    dirs: dict[str, Path] = {}
+    for d in sorted((out / "cache" / "geometry").glob("*-*")):
+        dirs.setdefault(d.name.split("-")[0], d)
+    return dirs
+
+
+def headline(results: StudyResults) -> list[str]:
+    """One line per damper and family: the peak response over the forces."""
+    lines = []
+    for d in results.dampers:
+        for ph in results.phases:
+            cs = results.select(damper=d, phase_deg=ph)
+            ok = [c for c in cs if c.peak_index >= 0]
+            if not ok:
+                continue
+            top = max(ok, key=lambda c: c.force_n)
+            s = top.summary()
+            lines.append(
+                f"{d}, {top.family}: at {top.force_n:g} N the peak is "
+                f"{s['peak_amplitude_mm']:.4g} mm at {s['peak_frequency_hz']:.2f} Hz, "
+                f"friction energy {s['friction_energy_mj']:.3g} mJ per cycle")
+    return lines
+
+
+def _csv(v: Any) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return "nan" if math.isnan(v) else f"{v:.9g}"
+    s = str(v)
+    return f'"{s}"' if "," in s else s
+
+
+def check_failures(results: StudyResults) -> None:
+    """Raise SolveError (exit 3) after writing everything if some case failed."""
+    bad = results.extras.get("failures") or []
+    if bad:
+        raise SolveError(f"{len(bad)} case(s) stopped early (their points are kept in the "
+                         f"results): " + "; ".join(bad[:3]), partial=results)
+
+
+__all__ = ["run_study", "prepare_model", "solve_case", "PreparedModel"]
