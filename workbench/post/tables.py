@@ -1,0 +1,388 @@
+"""The numbers behind the study figures and tables: peaks, energies, status shares, sweeps.
+
+Plain numpy on :class:`~workbench.post.results.StudyResults` and lists of
+:class:`~workbench.post.results.CaseResult`; :mod:`workbench.render` draws
+what these return. Report units: amplitude mm, energy per cycle mJ,
+frequency Hz, force N.
+
+Grouping: a *family* is one inter-blade phase angle (0 deg in-phase, 180 deg
+out-of-phase, any other angle); a *curve set* is every force of one damper
+and one family (the cases of one receptance figure). Tables follow the
+paper's Tables 1-2: one row per damper, one column per force, one table per
+family.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..io import write_text
+from .results import STATUS_KEYS, STATUS_NAMES, CaseResult, StudyResults, family_name
+
+__all__ = [
+    "STATUS_KEYS", "STATUS_NAMES", "PeakCurve", "SweepCurve", "Table", "base_variant",
+    "case_label", "cases_table", "curve_set", "energy_table", "families", "pick_forces",
+    "peak_amplitude_table", "peak_curve", "peak_frequency_table", "sci", "slug",
+    "stability_runs", "status_share_curves", "status_shares_table", "sweep_curve",
+    "sweep_curves", "sweep_table", "sweep_value",
+]
+
+
+# ---- formatting -------------------------------------------------------------------------
+
+
+def sci(value: float, digits: int = 2) -> str:
+    """Scientific notation the way the paper writes it: ``1.1e-2``, ``2.3e-22``.
+
+    ``digits`` significant digits; ``0`` for zero, ``n/a`` for NaN.
+    """
+    v = float(value)
+    if math.isnan(v):
+        return "n/a"
+    if v == 0.0:
+        return "0"
+    mant, exp = f"{v:.{max(digits - 1, 0)}e}".split("e")
+    return f"{mant}e{int(exp)}"
+
+
+def fixed(value: float, digits: int = 4) -> str:
+    """A number with ``digits`` significant digits (``n/a`` for NaN)."""
+    v = float(value)
+    return "n/a" if math.isnan(v) else f"{v:.{digits}g}"
+
+
+def slug(text: str) -> str:
+    """A file-name-safe form of a label: ``"phase 90 deg" -> "phase-90deg"``."""
+    out = "".join(ch if ch.isalnum() or ch in "-." else "-" for ch in text.replace(" deg", "deg"))
+    while "--" in out:
+        out = out.replace("--", "-")
+    return out.strip("-").lower()
+
+
+# ---- grouping ---------------------------------------------------------------------------
+
+
+def families(results: StudyResults) -> list[float]:
+    """The phase angles of the study, in-phase first, then out-of-phase, then the others."""
+    def key(p: float) -> tuple[int, float]:
+        name = family_name(p)
+        return ({"in-phase": 0, "out-of-phase": 1}.get(name, 2), float(p) % 360.0)
+
+    return sorted(results.phases, key=key)
+
+
+def base_variant(results: StudyResults) -> str:
+    """The variant the comparison figures show: ``""`` when present, else the first one."""
+    variants = list(dict.fromkeys(c.variant for c in results.cases))
+    return "" if "" in variants or not variants else variants[0]
+
+
+def curve_set(results: StudyResults, damper: str, phase_deg: float,
+              variant: str | None = None) -> list[CaseResult]:
+    """Every force of one damper and one family (one variant), sorted by force."""
+    cases = results.select(damper=damper, phase_deg=phase_deg, variant=variant)
+    return sorted(cases, key=lambda c: c.force_n)
+
+
+def pick_forces(forces: Sequence[float], preferred: Sequence[float] = (9.6, 30.0)
+                ) -> list[float]:
+    """The forces of the status maps: ``preferred`` if all present, else lowest and highest."""
+    fs = sorted(set(float(f) for f in forces))
+    if not fs:
+        return []
+    if all(any(abs(f - p) <= 1e-9 * max(1.0, p) for f in fs) for p in preferred):
+        return [f for f in fs if any(abs(f - p) <= 1e-9 * max(1.0, p) for p in preferred)]
+    return sorted({fs[0], fs[-1]})
+
+
+def case_label(case: CaseResult) -> str:
+    """``"cone, in-phase, F = 9.6 N"`` (plus the variant if any)."""
+    v = f", {case.variant}" if case.variant else ""
+    return f"{case.damper}, {case.family}, F = {case.force_n:g} N{v}"
+
+
+# ---- curves -----------------------------------------------------------------------------
+
+
+def stability_runs(stable: np.ndarray) -> list[tuple[slice, bool]]:
+    """Split a branch into runs of equal stability for drawing (solid/dashed).
+
+    Consecutive runs share their boundary point, so the drawn pieces join
+    into one unbroken line. Returns ``[(slice, is_stable), ...]``.
+    """
+    s = np.asarray(stable, dtype=bool)
+    n = s.size
+    if n == 0:
+        return []
+    if n == 1:
+        return [(slice(0, 1), bool(s[0]))]
+    # a segment between points i and i+1 is stable when both ends are
+    seg = s[:-1] & s[1:]
+    runs, start = [], 0
+    for i in range(1, seg.size + 1):
+        if i == seg.size or seg[i] != seg[start]:
+            runs.append((slice(start, i + 1), bool(seg[start])))
+            start = i
+    return runs
+
+
+@dataclass(frozen=True)
+class PeakCurve:
+    """Resonance values of one curve set vs force (NaN where a branch has no point)."""
+
+    damper: str
+    phase_deg: float
+    force_n: np.ndarray
+    amp_mm: np.ndarray  # largest response amplitude of each branch
+    freq_hz: np.ndarray  # its frequency
+    energy_mj: np.ndarray  # friction energy per cycle, all pairs, at that point
+    stable: np.ndarray  # bool, that point is stable
+    failed: np.ndarray  # bool, the branch stopped on a failure
+
+    @property
+    def family(self) -> str:
+        return family_name(self.phase_deg)
+
+
+def _at_peak(case: CaseResult) -> tuple[float, float, float, bool]:
+    i = case.peak_index
+    if i < 0:
+        return (math.nan,) * 3 + (False,)
+    return (float(case.amp_mm[i]), float(case.freq_hz[i]), float(case.energy_mj[i].sum()),
+            bool(case.stable[i]))
+
+
+def peak_curve(cases: Sequence[CaseResult]) -> PeakCurve:
+    """Peak amplitude, frequency and friction energy vs force for one curve set."""
+    if not cases:
+        raise InputError("cases", "[]", "at least one case of one damper and one family")
+    cases = sorted(cases, key=lambda c: c.force_n)
+    _check_one_set(cases)
+    vals = [_at_peak(c) for c in cases]
+    return PeakCurve(
+        damper=cases[0].damper, phase_deg=cases[0].phase_deg,
+        force_n=np.array([c.force_n for c in cases]),
+        amp_mm=np.array([v[0] for v in vals]), freq_hz=np.array([v[1] for v in vals]),
+        energy_mj=np.array([v[2] for v in vals]), stable=np.array([v[3] for v in vals]),
+        failed=np.array([bool(c.branch.failed) for c in cases]),
+    )
+
+
+def _check_one_set(cases: Sequence[CaseResult]) -> None:
+    d = {(c.damper, round(c.phase_deg, 9)) for c in cases}
+    if len(d) != 1:
+        raise InputError("cases", sorted(d), "cases of a single damper and a single family")
+
+
+def status_share_curves(cases: Sequence[CaseResult]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Forces and the share (0..1) of pairs in each status at resonance, one curve set."""
+    cases = sorted(cases, key=lambda c: c.force_n)
+    _check_one_set(cases)
+    forces = np.array([c.force_n for c in cases])
+    shares = [c.status_shares() for c in cases]
+    return forces, {k: np.array([s[k] for s in shares]) for k in STATUS_KEYS}
+
+
+# ---- sweeps -----------------------------------------------------------------------------
+
+
+def sweep_value(case: CaseResult, option: str) -> float:
+    """The swept option's value of a case (``params[option]``; dashes or underscores)."""
+    for key in (option, option.replace("-", "_"), option.replace("_", "-")):
+        if key in case.params and case.params[key] is not None:
+            return float(case.params[key])
+    raise InputError(f"params[{option!r}] of case {case.case_id}", sorted(case.params),
+                     f"the swept option {option!r} in every case's parameters")
+
+
+@dataclass(frozen=True)
+class SweepCurve:
+    """Resonance values of one damper, family and force vs the swept option."""
+
+    damper: str
+    phase_deg: float
+    force_n: float
+    option: str
+    value: np.ndarray
+    amp_mm: np.ndarray
+    freq_hz: np.ndarray
+    energy_mj: np.ndarray
+    stable: np.ndarray
+    failed: np.ndarray
+
+    @property
+    def family(self) -> str:
+        return family_name(self.phase_deg)
+
+
+def sweep_curve(cases: Iterable[CaseResult], option: str) -> SweepCurve:
+    """Peak values vs the swept ``option`` for cases of one damper, family and force."""
+    cases = sorted(cases, key=lambda c: sweep_value(c, option))
+    if not cases:
+        raise InputError("cases", "[]", "at least one case")
+    keys = {(c.damper, round(c.phase_deg, 9), round(c.force_n, 12)) for c in cases}
+    if len(keys) != 1:
+        raise InputError("cases", sorted(keys), "cases of one damper, family and force")
+    vals = [_at_peak(c) for c in cases]
+    return SweepCurve(
+        damper=cases[0].damper, phase_deg=cases[0].phase_deg, force_n=cases[0].force_n,
+        option=option, value=np.array([sweep_value(c, option) for c in cases]),
+        amp_mm=np.array([v[0] for v in vals]), freq_hz=np.array([v[1] for v in vals]),
+        energy_mj=np.array([v[2] for v in vals]), stable=np.array([v[3] for v in vals]),
+        failed=np.array([bool(c.branch.failed) for c in cases]),
+    )
+
+
+def sweep_curves(results: StudyResults, option: str) -> list[SweepCurve]:
+    """One :class:`SweepCurve` per damper, family and force of a sweep study."""
+    out = []
+    for d in results.dampers:
+        for p in families(results):
+            for f in results.forces:
+                cases = results.select(damper=d, phase_deg=p, force_n=f)
+                if cases:
+                    out.append(sweep_curve(cases, option))
+    return out
+
+
+# ---- tables -----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Table:
+    """A small table of text cells: written as CSV and as markdown with the same cells."""
+
+    header: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+
+    def __post_init__(self) -> None:
+        for r in self.rows:
+            if len(r) != len(self.header):
+                raise InputError("table row", list(r), f"{len(self.header)} cells")
+
+    def csv_text(self) -> str:
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(self.header)
+        w.writerows(self.rows)
+        return buf.getvalue()
+
+    def markdown_text(self) -> str:
+        def line(cells: Sequence[str]) -> str:
+            return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"
+
+        sep = "|" + "|".join(["---"] + ["---:"] * (len(self.header) - 1)) + "|"
+        return "\n".join([line(self.header), sep, *(line(r) for r in self.rows)]) + "\n"
+
+    def write(self, stem: str | Path) -> tuple[Path, Path]:
+        """Write ``<stem>.csv`` and ``<stem>.md`` atomically; return both paths."""
+        stem = Path(stem)
+        csv_path = write_text(stem.with_suffix(".csv"), self.csv_text())
+        md_path = write_text(stem.with_suffix(".md"), self.markdown_text())
+        return csv_path, md_path
+
+    def column(self, name: str) -> list[str]:
+        return [r[self.header.index(name)] for r in self.rows]
+
+
+def _force_table(results: StudyResults, phase_deg: float, corner: str, value: Any,
+                 fmt: Any, variant: str | None) -> Table:
+    forces = [f for f in results.forces
+              if results.select(phase_deg=phase_deg, force_n=f, variant=variant)]
+    rows = []
+    for d in results.dampers:
+        cases = curve_set(results, d, phase_deg, variant)
+        if not cases:
+            continue
+        by_force = {round(c.force_n, 12): c for c in cases}
+        row = [d]
+        for f in forces:
+            c = by_force.get(round(f, 12))
+            cell = fmt(value(c)) if c is not None else ""
+            if c is not None and c.branch.failed:
+                cell += " (failed)"  # the value of a branch that stopped early
+            row.append(cell)
+        rows.append(tuple(row))
+    return Table((corner, *(f"{f:g} N" for f in forces)), tuple(rows))
+
+
+def energy_table(results: StudyResults, phase_deg: float, variant: str | None = None) -> Table:
+    """Friction energy per cycle at resonance, mJ: dampers x forces (paper Tables 1-2)."""
+    return _force_table(results, phase_deg, "energy per cycle (mJ) at force",
+                        lambda c: _at_peak(c)[2], sci, variant)
+
+
+def peak_amplitude_table(results: StudyResults, phase_deg: float,
+                         variant: str | None = None) -> Table:
+    """Largest response amplitude, mm: dampers x forces."""
+    return _force_table(results, phase_deg, "peak amplitude (mm) at force",
+                        lambda c: _at_peak(c)[0], lambda v: fixed(v, 4), variant)
+
+
+def peak_frequency_table(results: StudyResults, phase_deg: float,
+                         variant: str | None = None) -> Table:
+    """Frequency of the largest response, Hz: dampers x forces."""
+    return _force_table(results, phase_deg, "resonance frequency (Hz) at force",
+                        lambda c: _at_peak(c)[1], lambda v: fixed(v, 5), variant)
+
+
+def status_shares_table(results: StudyResults, phase_deg: float,
+                        variant: str | None = None) -> Table:
+    """Share of the pairs in each status at resonance, percent: one row per damper and force."""
+    rows = []
+    for d in results.dampers:
+        for c in curve_set(results, d, phase_deg, variant):
+            s = c.status_shares()
+            rows.append((d, f"{c.force_n:g}", *(fixed(100.0 * s[k], 3) for k in STATUS_KEYS)))
+    return Table(("damper", "force (N)", *(f"{n} (%)" for n in STATUS_NAMES)), tuple(rows))
+
+
+def cases_table(results: StudyResults) -> Table:
+    """One row per case: peak, energy, stability, shares, cost, completion (full precision)."""
+    header = ("case", "damper", "family", "force (N)", "variant", "peak frequency (Hz)",
+              "peak amplitude (mm)", "receptance (mm/N)", "friction energy (mJ)",
+              "peak stable", "points", "unstable points", "completed", "wall time (s)",
+              "message")
+    rows = []
+    for c in results.cases:
+        s = c.summary()
+        amp = s["peak_amplitude_mm"]
+        rows.append((
+            c.case_id, c.damper, c.family, f"{c.force_n:g}", c.variant,
+            fixed(_nan(s["peak_frequency_hz"]), 7), fixed(_nan(amp), 6),
+            fixed(_nan(amp) / c.force_n, 6), sci(_nan(s["friction_energy_mj"]), 4),
+            "" if s["peak_stable"] is None else ("yes" if s["peak_stable"] else "no"),
+            str(s["n_points"]), str(s["n_unstable"]),
+            "yes" if s["completed"] else ("failed" if c.branch.failed else "no"),
+            f"{s['wall_s']:.3g}", s["message"],
+        ))
+    return Table(header, tuple(rows))
+
+
+def sweep_table(curves: Sequence[SweepCurve]) -> Table:
+    """Long table of a sweep: damper, family, force, value, peak frequency, amplitude, energy."""
+    if not curves:
+        return Table(("damper",), ())
+    opt = curves[0].option
+    rows = []
+    for sc in curves:
+        for k in range(sc.value.size):
+            rows.append((sc.damper, sc.family, f"{sc.force_n:g}", f"{sc.value[k]:g}",
+                         fixed(sc.freq_hz[k], 6), fixed(sc.amp_mm[k], 5),
+                         sci(sc.energy_mj[k], 3),
+                         "failed" if sc.failed[k] else ("yes" if sc.stable[k] else "no")))
+    return Table(("damper", "family", "force (N)", opt, "peak frequency (Hz)",
+                  "peak amplitude (mm)", "friction energy (mJ)", "peak stable"), tuple(rows))
+
+
+def _nan(v: Any) -> float:
+    return math.nan if v is None else float(v)

@@ -1,0 +1,497 @@
+"""From the results of a study to the sections of its report: figures, tables, captions.
+
+:func:`build_sections` is what the study runner calls once every case is
+computed. It decides from ``results.kind`` and the cases present what to
+show, writes every figure under ``<study>/figures/`` (PNG) and every table
+under ``<study>/tables/`` (CSV and markdown with the same cells), and
+returns the ``sections`` of the report manifest (see
+:mod:`workbench.render.report`): ``{"id", "title", "text": [...],
+"figures": [{"path", "caption"}], "tables": [{"path", "caption"}]}``, paths
+relative to the study folder.
+
+What a comparison study gets (per family: in-phase, out-of-phase, any
+other phase angle; per damper; every force), in the manner of "On the
+efficiency of a conical under-platform damper for turbines":
+
+1. mode shapes (``figures/modes_*.png``, written by :mod:`.modes`, if present);
+2. receptances: every damper of a family overlaid (Fig. 9), then each
+   damper with all its forces (Fig. 10);
+3. peak amplitude vs force (Fig. 11) with tables of peak amplitude and
+   resonance frequency;
+4. friction energy per cycle at resonance: tables (Tables 1-2) and a figure;
+5. contact status: status maps (Fig. 12) at chosen forces, shares at
+   resonance vs force (Fig. 13) with their table;
+6. the status and energy of every pair painted on the damper (pyvista),
+   for the dampers whose geometry folder is given;
+7. any other PNG in ``figures/`` or CSV in ``tables/`` that was there
+   before (e.g. the rig picture written by the runner);
+8. one row per case: peaks, energies, stability, cost, failures.
+
+A sweep study (``kind == "sweep"``, ``inputs["sweep"]`` names the option)
+gets instead: peak amplitude and resonance frequency vs the swept value,
+the table of them, for a cone-angle sweep the friction energy next to the
+analytic kinematic slip, and the receptances of each damper, family and
+force with one curve per swept value. Other kinds (fidelity, robustness)
+get the comparison sections drawn for their base variant.
+
+A branch that failed part-way is drawn with what it has; the captions of
+the figures it appears in say so, and why.
+
+Re-running on the same folder rewrites the figures and tables and deletes
+those of its own file names (:data:`OWN_PREFIXES`, :data:`OWN_TABLE_PREFIXES`)
+that the new run did not make, so the folder matches the report; other
+files are never touched.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import WorkbenchError
+from ..log import progress
+from ..post.results import CaseResult, StudyResults, family_name
+from ..post.tables import (
+    Table,
+    base_variant,
+    cases_table,
+    curve_set,
+    energy_table,
+    families,
+    peak_amplitude_table,
+    peak_curve,
+    peak_frequency_table,
+    pick_forces,
+    slug,
+    status_shares_table,
+    sweep_curves,
+    sweep_table,
+)
+from . import study_figures as sf
+
+log = logging.getLogger(__name__)
+
+FIGURES, TABLES = "figures", "tables"
+# figure file names this module writes (anything else in figures/ is shown as found)
+OWN_PREFIXES = ("receptance_", "peak_amplitude_", "friction_energy_", "status_map_",
+                "status_shares_", "contact_", "sweep_")
+OWN_TABLE_PREFIXES = ("peak_amplitude_", "peak_frequency_", "friction_energy_",
+                      "status_shares_", "sweep_", "cases.")
+MODES_PREFIX = "modes_"
+# also what workbench.render.modes.render_modes names its files, if written into figures/
+MODE_FILE_PREFIXES = ("first_bending", MODES_PREFIX, "mode_")
+_LINE_WORDS = {"-": "solid", "--": "dashed", ":": "dotted", "-.": "dash-dot"}
+
+
+@dataclass
+class _Section:
+    id: str
+    title: str
+    text: list[str] = field(default_factory=list)
+    figures: list[dict[str, str]] = field(default_factory=list)
+    tables: list[dict[str, str]] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"id": self.id, "title": self.title, "text": self.text,
+                "figures": self.figures, "tables": self.tables}
+
+
+@dataclass
+class _Job:
+    """One figure to draw: ``run()`` writes the PNG(s) the section entries point to."""
+
+    run: Callable[[], Any]
+    section: _Section
+    entries: list[dict[str, str]]
+    optional: bool = False  # a WorkbenchError drops the entries instead of failing
+
+
+class _Builder:
+    def __init__(self, results: StudyResults, study_dir: Path):
+        self.results = results
+        self.root = Path(study_dir)
+        self.fig_dir = self.root / FIGURES
+        self.tab_dir = self.root / TABLES
+        self.sections: list[_Section] = []
+        self.jobs: list[_Job] = []
+        self.written: set[str] = set()  # table file names written by this run
+
+    def section(self, id_: str, title: str, text: Sequence[str] = ()) -> _Section:
+        s = _Section(id_, title, list(text))
+        self.sections.append(s)
+        return s
+
+    def figure(self, sec: _Section, name: str, caption: str,
+               draw: Callable[[Path], Any]) -> None:
+        path = self.fig_dir / f"{name}.png"
+        entry = {"path": f"{FIGURES}/{name}.png", "caption": caption}
+        sec.figures.append(entry)
+        self.jobs.append(_Job(lambda: draw(path), sec, [entry]))
+
+    def table(self, sec: _Section, name: str, table: Table, caption: str) -> None:
+        for path in table.write(self.tab_dir / name):
+            self.written.add(path.name)
+        sec.tables.append({"path": f"{TABLES}/{name}.csv",
+                           "caption": f"{caption} (also as markdown: {TABLES}/{name}.md)"})
+
+    def run(self) -> None:
+        for job in progress(self.jobs, desc="study figures", total=len(self.jobs), unit="fig"):
+            try:
+                job.run()
+            except WorkbenchError as e:
+                if not job.optional:
+                    raise
+                for entry in job.entries:
+                    job.section.figures.remove(entry)
+                job.section.text.append(f"A picture could not be drawn: {e}")
+                log.warning("figure skipped: %s", e)
+
+    def remove_stale(self) -> None:
+        """Delete figures and tables of ours left by an earlier run and not made by this one,
+        so the folder holds exactly what the report shows."""
+        shown = {Path(f["path"]).name for s in self.sections for f in s.figures}
+        for p in self.fig_dir.glob("*.png"):
+            if p.name.startswith(OWN_PREFIXES) and p.name not in shown:
+                log.debug("removing stale %s", p)
+                p.unlink()
+        for p in [*self.tab_dir.glob("*.csv"), *self.tab_dir.glob("*.md")]:
+            if p.name.startswith(OWN_TABLE_PREFIXES) and p.name not in self.written:
+                log.debug("removing stale %s", p)
+                p.unlink()
+
+
+# ---- helpers --------------------------------------------------------------------------
+
+
+def _fam_slug(phase_deg: float) -> str:
+    return slug(family_name(phase_deg))
+
+
+def _failures(cases: Sequence[CaseResult]) -> str:
+    notes = sf.failure_notes(cases)
+    return (" " + " ".join(notes)) if notes else ""
+
+
+def _forces_text(forces: Sequence[float]) -> str:
+    return ", ".join(f"{f:g}" for f in sorted(forces)) + " N"
+
+
+def _peak_sentence(cases: Sequence[CaseResult]) -> str:
+    """'cone: peak 0.0135 mm at 392.1 Hz (0.096 N) to 0.156 mm at 358.2 Hz (30 N)'."""
+    pc = peak_curve(cases)
+    ok = [k for k in range(pc.force_n.size) if pc.amp_mm[k] == pc.amp_mm[k]]
+    if not ok:
+        return f"{pc.damper}: no point computed"
+    a, b = ok[0], ok[-1]
+    first = f"{pc.amp_mm[a]:.3g} mm at {pc.freq_hz[a]:.1f} Hz ({pc.force_n[a]:g} N)"
+    if a == b:
+        return f"{pc.damper}: peak {first}"
+    last = f"{pc.amp_mm[b]:.3g} mm at {pc.freq_hz[b]:.1f} Hz ({pc.force_n[b]:g} N)"
+    ratio = (pc.amp_mm[b] / pc.force_n[b]) / (pc.amp_mm[a] / pc.force_n[a])
+    return (f"{pc.damper}: peak {first} to {last}; peak receptance at the highest force over "
+            f"that at the lowest {ratio:.3g} (1 for a linear response)")
+
+
+# ---- comparison -----------------------------------------------------------------------
+
+
+def _receptances(b: _Builder, variant: str) -> None:
+    r = b.results
+    for p in families(r):
+        fam = family_name(p)
+        cases = r.select(phase_deg=p, variant=variant)
+        if not cases:
+            continue
+        dampers = list(dict.fromkeys(c.damper for c in cases))
+        sec = b.section(f"receptances-{_fam_slug(p)}", f"Receptances, {fam}",
+                        [f"Response amplitude per newton of excitation at the response point "
+                         f"vs excitation frequency, forces {_forces_text(r.forces)}."]
+                        + [_peak_sentence(curve_set(r, d, p, variant)) + "." for d in dampers])
+        fs = f"receptance_{_fam_slug(p)}"
+        if len(dampers) > 1:
+            styles = ", ".join(f"{d} {_LINE_WORDS.get(sf.damper_style(d)[1], '')}".strip()
+                               for d in dampers)
+            b.figure(sec, f"{fs}_all",
+                     f"{fam}: receptances of every damper and force in one axes ({styles}); "
+                     "unstable parts on a grey band."
+                     + _failures(cases),
+                     lambda path, cs=cases: sf.plot_receptance_overlay(cs, path))
+        for d in dampers:
+            own = curve_set(r, d, p, variant)
+            b.figure(sec, f"{fs}_{slug(d)}",
+                     f"{d} damper, {fam}: receptance |x|/F (mm/N) for every force; stable "
+                     "solid, unstable (Hill) dashed." + _failures(own),
+                     lambda path, cs=own: sf.plot_receptances(cs, path, forces=r.forces))
+
+
+def _peaks_and_energy(b: _Builder, variant: str) -> None:
+    r = b.results
+    sec = b.section("peaks", "Peak amplitude vs excitation",
+                    ["Largest response amplitude of each branch against the excitation force, "
+                     "log-log: a damper that does not dissipate (a rolling cylinder) follows "
+                     "the grey line of slope 1; a damper that saturates flattens."])
+    en = b.section("friction-energy", "Friction energy at resonance",
+                   ["Energy dissipated by friction per cycle at the resonance peak of each "
+                    "branch, summed over every contact pair, mJ; one table per family with "
+                    "the dampers in rows and the forces in columns, as in the paper's "
+                    "Tables 1-2. Values many decades below the others (of order 1e-18 mJ) are "
+                    "round-off: those contacts do not slip."])
+    for p in families(r):
+        fam = family_name(p)
+        cases = r.select(phase_deg=p, variant=variant)
+        if not cases:
+            continue
+        fsl = _fam_slug(p)
+        b.figure(sec, f"peak_amplitude_{fsl}",
+                 f"{fam}: peak response amplitude (mm) vs excitation force (N), one curve per "
+                 "damper; hollow markers: unstable peak; crosses: failed branch."
+                 + _failures(cases),
+                 lambda path, cs=cases: sf.plot_peak_vs_force(cs, path))
+        b.table(sec, f"peak_amplitude_{fsl}", peak_amplitude_table(r, p, variant),
+                f"{fam}: peak response amplitude, mm")
+        b.table(sec, f"peak_frequency_{fsl}", peak_frequency_table(r, p, variant),
+                f"{fam}: frequency of the peak, Hz")
+        b.table(en, f"friction_energy_{fsl}", energy_table(r, p, variant),
+                f"{fam}: friction energy per cycle at resonance, mJ")
+        b.figure(en, f"friction_energy_{fsl}",
+                 f"{fam}: friction energy per cycle at resonance (mJ, log) vs excitation force "
+                 "(N), one curve per damper." + _failures(cases),
+                 lambda path, cs=cases: sf.plot_energy_vs_force(cs, path))
+
+
+def _status(b: _Builder, variant: str) -> None:
+    r = b.results
+    chosen = pick_forces(r.forces)
+    sec = b.section("contact-status", "Contact status",
+                    [f"Status of every contact pair over one period along each branch at "
+                     f"{_forces_text(chosen)}: pairs of platform 1 (side 0) below the dashed "
+                     "line, platform 2 above; pairs numbered along each line from the "
+                     "damper's large end (cone) or -y (cylinder), row by row for the wedge. "
+                     "Then the share of each status at resonance against the force."])
+    for p in families(r):
+        fam = family_name(p)
+        cases = r.select(phase_deg=p, variant=variant)
+        if not cases:
+            continue
+        for d in dict.fromkeys(c.damper for c in cases):
+            own = [c for c in curve_set(r, d, p, variant)
+                   if any(abs(c.force_n - f) <= 1e-9 * max(1.0, f) for f in chosen)]
+            if not own:
+                continue
+            b.figure(sec, f"status_map_{_fam_slug(p)}_{slug(d)}",
+                     f"{d} damper, {fam}: contact status of every pair vs frequency at "
+                     f"{_forces_text([c.force_n for c in own])} (stuck, stick-slip, partial "
+                     "separation, full separation); dotted red line: resonance peak."
+                     + _failures(own),
+                     lambda path, cs=own: sf.plot_status_map(cs, path))
+        b.figure(sec, f"status_shares_{_fam_slug(p)}",
+                 f"{fam}: share of the contact pairs in each status at resonance vs force; "
+                 "colour: status, line style and marker: damper." + _failures(cases),
+                 lambda path, cs=cases: sf.plot_status_shares(cs, path))
+        b.table(sec, f"status_shares_{_fam_slug(p)}", status_shares_table(r, p, variant),
+                f"{fam}: share of the pairs in each status at resonance, percent")
+
+
+def _contact_maps(b: _Builder, variant: str, geometry_dirs: dict[str, Path]) -> None:
+    from .contact_maps import render_contact_maps
+
+    r = b.results
+    sec = b.section("contact-maps", "Status and dissipation on the damper",
+                    ["Each contact pair painted at its point on the damper (seen from above "
+                     "the groove, the platforms left out, platform 1's contact at the bottom) "
+                     "at the resonance of the highest force: its status, and its friction "
+                     "energy per cycle in mJ."])
+    for p in families(r):
+        fam = family_name(p)
+        for d in dict.fromkeys(c.damper for c in r.select(phase_deg=p, variant=variant)):
+            if d not in geometry_dirs:
+                continue
+            own = [c for c in curve_set(r, d, p, variant) if c.branch.n_points]
+            if not own:
+                continue
+            c = own[-1]
+            stem = b.fig_dir / f"contact_{_fam_slug(p)}_{slug(d)}"
+            base = f"{d} damper, {fam}, F = {c.force_n:g} N, at resonance"
+            entries = [{"path": f"{FIGURES}/{stem.name}_status.png",
+                        "caption": f"{base}: contact status of every pair (stuck, stick-slip, "
+                                   "partial or full separation) on the damper surface."
+                                   + _failures([c])},
+                       {"path": f"{FIGURES}/{stem.name}_energy.png",
+                        "caption": f"{base}: friction energy per cycle of every pair, mJ."
+                                   + _failures([c])}]
+            sec.figures.extend(entries)
+            b.jobs.append(_Job(lambda c=c, g=geometry_dirs[d], s=stem:
+                               render_contact_maps(c, g, s), sec, entries, optional=True))
+
+
+# ---- sweeps ---------------------------------------------------------------------------
+
+
+def _cone_design(results: StudyResults, geometry_dirs: dict[str, Path]) -> tuple[float, ...]:
+    """(beta deg, R1 mm, L mm) of the cone: its geometry folder, else the geometry files."""
+    gdir = geometry_dirs.get("cone")
+    if gdir is not None and (Path(gdir) / "geometry.h5").is_file():
+        from ..geometry.records import BuiltGeometry
+
+        prm = BuiltGeometry.load(Path(gdir) / "geometry.h5").params
+        return (float(prm["rig"]["platform"]["angle_deg"]), float(prm["cone"]["r1_mm"]),
+                float(prm["cone"]["length_mm"]))
+    from ..geometry.params import load_geometry_params
+
+    gp = load_geometry_params("cone", results.inputs.get("geometry") or None)
+    return gp.rig.platform.angle_deg, gp.shape.r1_mm, gp.shape.length_mm
+
+
+def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
+    r = b.results
+    name, unit = sf.option_label(option)
+    curves = sweep_curves(r, option)
+    values = sorted({v for sc in curves for v in sc.value.tolist()})
+    sec = b.section(f"sweep-{slug(option)}", f"Sweep of {name}",
+                    [f"Resonance of each damper and family as {name} ({option}) takes the "
+                     f"values {', '.join(f'{v:g}' for v in values)} {unit}".rstrip()
+                     + f"; forces {_forces_text(r.forces)}."])
+    osl = slug(option)
+    b.figure(sec, f"sweep_{osl}",
+             f"Peak response amplitude (mm, top) and resonance frequency (Hz, bottom) vs "
+             f"{name} ({unit}); one column per family, one curve per damper."
+             + _failures(r.cases),
+             lambda path: sf.plot_sweep(r.cases, option, path))
+    b.table(sec, f"sweep_{osl}", sweep_table(curves),
+            f"Sweep of {option}: resonance of every damper, family and force")
+    if option.replace("_", "-") == "cone-angle" and any(c.damper.startswith("cone")
+                                                        for c in r.cases):
+        beta, r1, length = _cone_design(r, geometry_dirs)
+        cones = [c for c in r.cases if c.damper.startswith("cone")]
+        b.figure(sec, f"sweep_{osl}_energy_slip",
+                 "Cone: friction energy per cycle at resonance (mJ) vs cone semi-angle (deg), "
+                 "above the largest kinematic slip per unit in-phase radial platform motion "
+                 f"from the paper's eq. 6 and the exact 3-D rigid-body kinematics (beta = "
+                 f"{beta:g} deg, R1 = {r1:g} mm, L = {length:g} mm)." + _failures(cones),
+                 lambda path: sf.plot_cone_angle_energy(cones, path, beta_deg=beta,
+                                                        r1_mm=r1, length_mm=length,
+                                                        option=option))
+    rec = b.section(f"sweep-{slug(option)}-receptances", f"Receptances across the {name} sweep")
+    for p in families(r):
+        for d in r.dampers:
+            for f in r.forces:
+                own = r.select(damper=d, phase_deg=p, force_n=f)
+                if not own:
+                    continue
+                b.figure(rec, f"sweep_{osl}_receptance_{_fam_slug(p)}_{slug(d)}_{f:g}N",
+                         f"{d} damper, {family_name(p)}, F = {f:g} N: receptance (mm/N) for "
+                         f"every value of {option}." + _failures(own),
+                         lambda path, cs=own: sf.plot_sweep_receptances(cs, option, path))
+
+
+# ---- figures found on disk, the cases table -------------------------------------------
+
+
+def _mode_caption(stem: str) -> str:
+    """'first_bending' -> 'First bending, in-phase and out-of-phase'; 'mode_03' -> 'Mode 3';
+    'modes_in-phase' -> 'Mode shape, in-phase'."""
+    if stem.startswith("first_bending"):
+        return "First bending, in-phase and out-of-phase"
+    if stem.startswith(MODES_PREFIX):
+        return "Mode shape, " + stem[len(MODES_PREFIX):].replace("_", " ")
+    tail = stem[len("mode_"):]
+    return f"Mode {int(tail)}" if tail.isdigit() else "Mode " + tail.replace("_", " ")
+
+
+def _found_files(b: _Builder) -> tuple[_Section | None, _Section | None]:
+    """Sections (not yet placed) for files already in the study folder when we start.
+
+    Mode shapes (``figures/modes_*.png``, and ``first_bending.png`` and
+    ``mode_<k>.png`` as :func:`workbench.render.modes.render_modes` names
+    them) get their own section; any other PNG in ``figures/`` and any CSV
+    in ``tables/`` that this module does not write go to "Other figures and
+    tables", so the report shows everything the study produced.
+    """
+    pngs = sorted(p for p in b.fig_dir.glob("*.png") if not p.name.startswith("."))
+    csvs = sorted(p for p in b.tab_dir.glob("*.csv") if not p.name.startswith("."))
+    modes = [p for pre in MODE_FILE_PREFIXES for p in pngs if p.name.startswith(pre)]
+    other = [p for p in pngs if not p.name.startswith((*MODE_FILE_PREFIXES, *OWN_PREFIXES))]
+    other_tables = [p for p in csvs if not p.name.startswith(OWN_TABLE_PREFIXES)]
+    mode_sec = other_sec = None
+    if modes:
+        mode_sec = _Section("modes", "Mode shapes",
+                            ["First bending modes of the blades with the damper: in-phase "
+                             "(the platform edges move radially relative to each other) and "
+                             "out-of-phase (they open and close the groove); deformed shapes "
+                             "coloured by displacement magnitude."])
+        for p in modes:
+            mode_sec.figures.append({"path": f"{FIGURES}/{p.name}",
+                                     "caption": f"{_mode_caption(p.stem)}: deformed rig and "
+                                                "damper coloured by displacement magnitude."})
+    if other or other_tables:
+        other_sec = _Section("other-figures", "Other figures and tables")
+        for p in other:
+            other_sec.figures.append({"path": f"{FIGURES}/{p.name}",
+                                      "caption": p.stem.replace("_", " ")})
+        for p in other_tables:
+            other_sec.tables.append({"path": f"{TABLES}/{p.name}",
+                                     "caption": p.stem.replace("_", " ")})
+    return mode_sec, other_sec
+
+
+def _cases(b: _Builder) -> None:
+    r = b.results
+    notes = sf.failure_notes(r.cases)
+    n_ok = sum(1 for c in r.cases if c.branch.completed and not c.branch.failed)
+    text = [f"{len(r.cases)} cases, {n_ok} completed."]
+    text += notes
+    sec = b.section("cases", "Cases", text)
+    b.table(sec, "cases", cases_table(r),
+            "Every case: resonance, friction energy, stability, cost and completion")
+
+
+# ---- entry point ----------------------------------------------------------------------
+
+
+def build_sections(results: StudyResults, study_dir: Path, *,
+                   geometry_dirs: dict[str, Path] | None = None) -> list[dict]:
+    """Write every figure and table of a study and return the report's ``sections``.
+
+    ``study_dir`` is the study folder (figures go to ``figures/``, tables
+    to ``tables/``; paths in the result are relative to it).
+    ``geometry_dirs`` maps a damper name to its geometry folder (the one
+    holding ``damper.msh`` and ``geometry.h5``): the status and energy of
+    the pairs are painted on those dampers.
+    """
+    study_dir = Path(study_dir)
+    geometry_dirs = {k: Path(v) for k, v in (geometry_dirs or {}).items()}
+    b = _Builder(results, study_dir)
+    b.fig_dir.mkdir(parents=True, exist_ok=True)
+    b.tab_dir.mkdir(parents=True, exist_ok=True)
+    if not results.cases:
+        b.section("cases", "Cases", ["The study has no case."])
+        return [s.as_dict() for s in b.sections]
+    modes, other = _found_files(b)
+    if modes is not None:
+        b.sections.append(modes)
+    option = results.inputs.get("sweep")
+    if results.kind == "sweep" and option:
+        _sweep(b, str(option), geometry_dirs)
+    else:
+        variant = base_variant(results)
+        if len({c.variant for c in results.cases}) > 1:
+            b.section("variant", "Variant shown",
+                      [f"The figures below show the cases of variant "
+                       f"{variant or '(base settings)'!s}; the table of cases lists all."])
+        _receptances(b, variant)
+        _peaks_and_energy(b, variant)
+        _status(b, variant)
+        if geometry_dirs:
+            _contact_maps(b, variant, geometry_dirs)
+    if other is not None:
+        b.sections.append(other)
+    _cases(b)
+    b.run()
+    b.remove_stale()
+    log.info("wrote %d figures and %d tables under %s",
+             sum(len(s.figures) for s in b.sections), sum(len(s.tables) for s in b.sections),
+             study_dir)
+    return [s.as_dict() for s in b.sections]
