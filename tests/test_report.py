@@ -90,8 +90,10 @@ def test_headless_chromium_renders_first_figure(tmp_path):
     # the page's load handler records the decoded size of the first figure
     assert 'data-first-figure="600x400"' in dom, dom[:500]
     shot = tmp_path / "shot.png"
-    subprocess.run(["chromium", *flags, "--window-size=1200,900", f"--screenshot={shot}", url],
-                   capture_output=True, timeout=120)
+    # the virtual-time budget lets the page load and decode its images before the
+    # screenshot, however loaded the machine is
+    subprocess.run(["chromium", *flags, "--virtual-time-budget=5000", "--window-size=1200,900",
+                    f"--screenshot={shot}", url], capture_output=True, timeout=120)
     import matplotlib.image as mpimg
 
     img = np.asarray(mpimg.imread(str(shot)))[..., :3]
