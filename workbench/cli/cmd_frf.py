@@ -1,0 +1,141 @@
+"""``upd frf``: frequency response curves of a reduced model with friction contacts."""
+
+from __future__ import annotations
+
+import argparse
+import logging
+from pathlib import Path
+from typing import Any
+
+from .main import Context
+
+HELP = "frequency response of reduced matrices with friction contacts (harmonic balance)"
+DESCRIPTION = """\
+Compute the forced response of a linear reduced model (matrices from any FE code,
+.npz or HDF5) with 3-D friction contact elements, by the multi-harmonic balance
+method with pseudo-arc-length continuation and Hill stability, one curve per
+excitation level of the model file.
+
+For each level it writes curve_<i>.h5 (the branch), curve_<i>.csv and
+curve_<i>.png (status map), plus frf.png (all levels) and summary.json to --out,
+and prints per level: peak_frequency_hz, peak_amplitude (largest |y(t)| over the
+period of the first output DOF at the peak, in the model's length unit),
+h1_amplitude (its harmonic-1 amplitude there), n_points, wall_s and the worst
+energy-balance residual. Examples: studies/examples/*.toml.
+"""
+
+log = logging.getLogger(__name__)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("model", type=Path, help="model file (TOML; see studies/examples)")
+    p.add_argument(
+        "--levels",
+        metavar="L1,L2,...",
+        help="excitation levels instead of the file's [excitation] levels",
+    )
+    p.add_argument("--band", metavar="F0,F1", help="frequency band in Hz instead of [band]")
+    p.add_argument("--harmonics", metavar="H0,H1,...", help="harmonic list instead of [hbm]")
+    p.add_argument("--nt", metavar="N", help="time samples per period instead of [hbm] nt")
+    p.add_argument("--no-stability", action="store_true", help="skip Hill's method")
+
+
+def _list(text: str | None, name: str, cast) -> list | None:
+    from ..errors import InputError
+
+    if text is None:
+        return None
+    try:
+        return [cast(v) for v in text.replace(" ", "").split(",") if v]
+    except ValueError:
+        raise InputError(name, text, "a comma-separated list of numbers") from None
+
+
+def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
+    from ..errors import InputError, SolveError
+    from ..hbm import frequency_response, load_frf_model
+    from ..io import write_json
+    from ..render.curves import plot_frf, plot_status_map
+
+    over: dict[str, dict[str, Any]] = {}
+    lv = _list(args.levels, "--levels", float)
+    if lv is not None:
+        over.setdefault("excitation", {})["levels"] = lv
+    band = _list(args.band, "--band", float)
+    if band is not None:
+        if len(band) != 2:
+            raise InputError("--band", args.band, "two frequencies F0,F1 in Hz")
+        over["band"] = {"start_hz": band[0], "end_hz": band[1]}
+    hs = _list(args.harmonics, "--harmonics", int)
+    if hs is not None:
+        over.setdefault("hbm", {})["harmonics"] = hs
+    if args.nt is not None:
+        over.setdefault("hbm", {})["nt"] = _list(args.nt, "--nt", int)[0]
+    if args.no_stability:
+        over.setdefault("solver", {})["stability"] = False
+    model = load_frf_model(args.model, over)
+    out = ctx.out_dir(f"results/frf/{model.name}")
+    mm = model.length_unit == "m"
+    branches, rows, failures = [], [], []
+    for i, level in enumerate(model.levels):
+        b = frequency_response(
+            model.system,
+            model.f1,
+            level,
+            model.band_hz,
+            model.outputs,
+            harmonics=model.harmonics,
+            nt=model.nt or None,
+            options=model.options,
+            output_names=model.output_names,
+            label=f"{model.name} level {level:g}",
+        )
+        branches.append(b)
+        stem = f"curve_{i}"
+        files = {
+            "h5": str(b.save(out / f"{stem}.h5")),
+            "csv": str(b.to_csv(out / f"{stem}.csv", unit=model.length_unit)),
+        }
+        if b.n_points and b.status.shape[1]:
+            files["png"] = str(
+                plot_status_map(
+                    b, out / f"{stem}.png", title=f"{model.name}: contact status, level {level:g}"
+                )
+            )
+        row = b.summary()
+        row["peak_amplitude_unit"] = model.length_unit
+        if mm and row["peak_amplitude"] is not None:
+            row["peak_amplitude_mm"] = row["peak_amplitude"] * 1e3
+            row["h1_amplitude_mm"] = row["h1_amplitude"] * 1e3
+        row["files"] = files
+        rows.append(row)
+        if b.failed:
+            failures.append(f"level {level:g}: {b.message}")
+    fig = plot_frf(
+        branches,
+        out / "frf.png",
+        unit_scale=1e3 if mm else 1.0,
+        unit="mm" if mm else model.length_unit,
+        title=f"{model.name}",
+    )
+    summary = {
+        "model": str(model.path),
+        "name": model.name,
+        "n_dofs": model.system.n,
+        "n_elements": model.system.n_el,
+        "length_unit": model.length_unit,
+        "band_hz": list(model.band_hz),
+        "harmonics": list(model.harmonics),
+        "nt": int(branches[0].nt) if branches else None,
+        "figure": str(fig),
+        "out": str(out),
+        "curves": rows,
+    }
+    write_json(out / "summary.json", summary)
+    if failures:
+        raise SolveError(
+            f"{len(failures)} of {len(rows)} curves stopped early ("
+            + "; ".join(failures)
+            + f"); what was computed is in {out}"
+        )
+    return summary

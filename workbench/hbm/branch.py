@@ -1,0 +1,242 @@
+"""The result of a frequency response: a branch of periodic solutions, saved to HDF5.
+
+Per point ``i`` (in continuation order, so a curve that turns back keeps
+its order): ``freq_hz[i]``; ``stable[i]`` (Hill); ``newton_its[i]``;
+``energy_residual[i]`` (relative, work of the excitation against viscous +
+contact work per cycle); ``out_amp[i, j]`` the largest ``|y_j(t)|`` over
+the period and ``out_h1[i, j]`` the harmonic-1 amplitude of output ``j``
+(model length unit); ``out_harm[i]`` (nh, n_out) the output harmonics;
+``status[i, e]`` (0 stuck, 1 stick-slip, 2 partial separation, 3 full
+separation); ``friction_energy[i, e]`` (J per cycle); ``x[i]`` the solved
+unknowns (m; the layout of :mod:`.balance`), from which
+``HarmonicBalance.response`` recovers every DOF.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..io import atomic_path
+
+_ARRAYS = (
+    "freq_hz",
+    "stable",
+    "newton_its",
+    "energy_residual",
+    "out_amp",
+    "out_h1",
+    "out_harm",
+    "status",
+    "friction_energy",
+    "x",
+    "work_ext",
+    "work_visc",
+    "work_friction",
+    "work_normal",
+    "max_floquet_real",
+)
+
+
+@dataclass
+class Branch:
+    """A computed frequency response curve (see the module docstring for the arrays)."""
+
+    level: float
+    band_hz: tuple[float, float]
+    harmonics: tuple[int, ...]
+    nt: int
+    output_names: tuple[str, ...]
+    space: str = "condensed"
+    freq_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    stable: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    newton_its: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    energy_residual: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    out_amp: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    out_h1: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    out_harm: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
+    status: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.int8))
+    friction_energy: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    x: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    work_ext: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    work_visc: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    work_friction: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    work_normal: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    max_floquet_real: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    completed: bool = False
+    failed: bool = False
+    message: str = ""
+    timings: dict[str, float] = field(default_factory=dict)
+    stats: dict[str, Any] = field(default_factory=dict)
+    options: dict[str, Any] = field(default_factory=dict)
+    label: str = ""
+
+    @property
+    def n_points(self) -> int:
+        return int(self.freq_hz.size)
+
+    def peak(self, output: int = 0) -> int:
+        """Index of the point with the largest output amplitude (-1 if empty)."""
+        if self.n_points == 0:
+            return -1
+        return int(np.argmax(self.out_amp[:, output]))
+
+    def summary(self, output: int = 0) -> dict[str, Any]:
+        """The numbers the CLI prints for this curve (amplitudes in the model's length unit)."""
+        i = self.peak(output)
+        return dict(
+            level=self.level,
+            peak_frequency_hz=float(self.freq_hz[i]) if i >= 0 else None,
+            peak_amplitude=float(self.out_amp[i, output]) if i >= 0 else None,
+            h1_amplitude=float(self.out_h1[i, output]) if i >= 0 else None,
+            peak_stable=bool(self.stable[i]) if i >= 0 else None,
+            n_points=self.n_points,
+            n_unstable=int(np.sum(~self.stable)),
+            wall_s=round(float(self.timings.get("total", 0.0)), 4),
+            energy_residual_max=float(np.max(self.energy_residual)) if self.n_points else None,
+            newton_its=int(np.sum(self.newton_its)),
+            completed=self.completed,
+            failed=self.failed,
+            message=self.message,
+        )
+
+    def save(self, path: str | Path) -> Path:
+        """Write to HDF5 atomically."""
+        import h5py
+
+        path = Path(path)
+        with atomic_path(path) as tmp, h5py.File(tmp, "w") as h:
+            for name in _ARRAYS:
+                h.create_dataset(name, data=getattr(self, name))
+            a = h.attrs
+            a["level"] = self.level
+            a["band_hz"] = np.asarray(self.band_hz, dtype=float)
+            a["harmonics"] = np.asarray(self.harmonics, dtype=int)
+            a["nt"] = self.nt
+            a["output_names"] = json.dumps(list(self.output_names))
+            a["space"] = self.space
+            a["completed"] = self.completed
+            a["failed"] = self.failed
+            a["message"] = self.message
+            a["label"] = self.label
+            for k in ("timings", "stats", "options"):
+                a[k] = json.dumps(getattr(self, k), default=float)
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> Branch:
+        import h5py
+
+        with h5py.File(path, "r") as h:
+            a = h.attrs
+            kw: dict[str, Any] = {name: h[name][()] for name in _ARRAYS}
+            kw["stable"] = kw["stable"].astype(bool)
+            return cls(
+                level=float(a["level"]),
+                band_hz=tuple(float(v) for v in a["band_hz"]),
+                harmonics=tuple(int(v) for v in a["harmonics"]),
+                nt=int(a["nt"]),
+                output_names=tuple(json.loads(a["output_names"])),
+                space=str(a["space"]),
+                completed=bool(a["completed"]),
+                failed=bool(a["failed"]),
+                message=str(a["message"]),
+                label=str(a["label"]),
+                timings=json.loads(a["timings"]),
+                stats=json.loads(a["stats"]),
+                options=json.loads(a["options"]),
+                **kw,
+            )
+
+    def to_csv(self, path: str | Path, unit_scale: float = 1.0, unit: str = "m") -> Path:
+        """One row per point: frequency, stability, per-output amplitudes, energies."""
+        from ..io import write_text
+
+        cols = ["freq_hz", "stable", "newton_its", "energy_residual"]
+        for nm in self.output_names:
+            cols += [f"{nm}_amp_{unit}", f"{nm}_h1_{unit}"]
+        cols += [
+            "friction_energy_j",
+            "viscous_energy_j",
+            "excitation_work_j",
+            "n_stuck",
+            "n_stick_slip",
+            "n_partial_separation",
+            "n_full_separation",
+        ]
+        lines = [",".join(cols)]
+        for i in range(self.n_points):
+            row = [
+                f"{self.freq_hz[i]:.9g}",
+                str(int(self.stable[i])),
+                str(int(self.newton_its[i])),
+                f"{self.energy_residual[i]:.3e}",
+            ]
+            for j in range(len(self.output_names)):
+                row += [
+                    f"{self.out_amp[i, j] * unit_scale:.9g}",
+                    f"{self.out_h1[i, j] * unit_scale:.9g}",
+                ]
+            counts = (
+                np.bincount(self.status[i].astype(int), minlength=4)
+                if self.status.shape[1]
+                else [0] * 4
+            )
+            row += [
+                f"{self.work_friction[i]:.9g}",
+                f"{self.work_visc[i]:.9g}",
+                f"{self.work_ext[i]:.9g}",
+            ]
+            row += [str(int(c)) for c in counts[:4]]
+            lines.append(",".join(row))
+        return write_text(path, "\n".join(lines) + "\n")
+
+
+def arc_length(
+    freq: np.ndarray, amp: np.ndarray, box: tuple[float, float, float, float]
+) -> np.ndarray:
+    """Cumulative arc length of a curve in the box-normalised (frequency, amplitude) plane."""
+    f0, f1, a0, a1 = box
+    p = np.column_stack(
+        [
+            (np.asarray(freq) - f0) / max(f1 - f0, 1e-300),
+            (np.asarray(amp) - a0) / max(a1 - a0, 1e-300),
+        ]
+    )
+    return np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(p, axis=0).T))])
+
+
+def curve_distance(
+    freq_a: np.ndarray, amp_a: np.ndarray, freq_b: np.ndarray, amp_b: np.ndarray
+) -> float:
+    """Largest distance between two curves, point to nearest point of the other polyline.
+
+    Both curves are normalised to the box of their union (frequency and
+    amplitude each mapped to [0, 1]), so the result is a fraction of the
+    plot; it is symmetric (a Hausdorff distance) and independent of how the
+    points are spaced along either curve.
+    """
+    fa, aa, fb, ab = (np.asarray(v, dtype=float) for v in (freq_a, amp_a, freq_b, amp_b))
+    f0, f1 = min(fa.min(), fb.min()), max(fa.max(), fb.max())
+    a0, a1 = min(aa.min(), ab.min()), max(aa.max(), ab.max())
+    sf, sa = max(f1 - f0, 1e-300), max(a1 - a0, 1e-300)
+    A = np.column_stack([(fa - f0) / sf, (aa - a0) / sa])
+    B = np.column_stack([(fb - f0) / sf, (ab - a0) / sa])
+    return max(_to_polyline(A, B).max(), _to_polyline(B, A).max())
+
+
+def _to_polyline(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Distance of each point of P to the polyline through Q."""
+    if Q.shape[0] == 1:
+        return np.hypot(*(P - Q[0]).T)
+    a = Q[:-1][None]  # (1, m, 2)
+    d = (Q[1:] - Q[:-1])[None]
+    p = P[:, None]
+    L2 = np.maximum((d**2).sum(-1), 1e-300)
+    t = np.clip(((p - a) * d).sum(-1) / L2, 0.0, 1.0)
+    proj = a + t[..., None] * d
+    return np.sqrt(((p - proj) ** 2).sum(-1)).min(axis=1)

@@ -1,0 +1,354 @@
+"""The TOML input of ``upd frf``: reduced matrices from any FE code, excitation, contacts.
+
+A model file (every key is checked; unknown keys are refused with a hint)::
+
+    [model]
+    matrices = "model.npz"      # .npz or .h5/.hdf5, relative to this file
+    mass = "M"                  # array (dataset) names in that file
+    stiffness = "K"
+    damping = ""                # a viscous matrix C (N s/m); empty: damping_ratio
+    damping_ratio = 0.005       # modal damping on the modes with stuck contacts
+    static_force = ""           # an optional constant force vector (N)
+    balance = true              # add the force that carries the contact preloads
+    length_unit = "m"           # unit of the DOFs (peak_amplitude is in this unit)
+
+    [excitation]                # f(t) = level * amplitude * cos(w t + phase)
+    dofs = [0]
+    amplitudes_n = [1.0]        # N per unit level
+    phases_deg = [0.0]
+    levels = [0.5, 1.0, 2.0]
+
+    [band]
+    start_hz = 80.0
+    end_hz = 150.0
+
+    [hbm]
+    harmonics = [0, 1, 2, 3]
+    nt = 0                      # samples per period; 0 picks one
+
+    [output]
+    dofs = [0]
+    names = ["x"]
+
+    [[contact]]                 # one table per group of elements with the same parameters
+    dofs = [[0, -1, 1]]         # per element [t1] or [t1, t2, n] (-1: no such direction)
+    other = []                  # platform DOFs (same shape); empty: against the ground
+    mu = 0.3
+    kt_n_per_m = 1.0e5
+    kn_n_per_m = 2.0e5
+    n0_n = 5.0
+
+    [solver]                    # any field of workbench.hbm.SolverOptions
+    ds_max = 0.2
+
+Matrices in a ``.npz`` are arrays; a sparse matrix ``K`` may be stored as
+``K_data``, ``K_indices``, ``K_indptr``, ``K_shape`` (CSR). In HDF5 they
+are datasets (or groups with those four members).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..config import load_record, param, read_toml
+from ..contact import LAWS, ContactElements
+from ..errors import InputError, check_range, did_you_mean
+from .options import SolverOptions
+from .system import System
+
+
+@dataclass(frozen=True)
+class ModelSection:
+    matrices: str = param("", "file with the matrices (.npz or .h5), relative to the TOML file")
+    mass: str = param("M", "name of the mass matrix (kg)")
+    stiffness: str = param("K", "name of the stiffness matrix (N/m)")
+    damping: str = param("", "name of a viscous damping matrix (N s/m); empty: damping_ratio")
+    damping_ratio: float = param(
+        0.0, "modal damping ratio on the modes with stuck contacts", lo=0.0, hi=1.0
+    )
+    static_force: str = param("", "name of a constant force vector (N); empty: none")
+    balance: bool = param(True, "add the constant force that carries the contact preloads")
+    length_unit: str = param("m", "unit of the generalised displacements")
+
+
+@dataclass(frozen=True)
+class ExcitationSection:
+    dofs: list = param([], "DOFs loaded by the harmonic force")
+    amplitudes_n: list = param([], "force amplitude per DOF per unit level, N")
+    phases_deg: list = param([], "phase per DOF, deg (default 0)")
+    levels: list = param([1.0], "excitation levels (multipliers of the amplitudes)")
+
+
+@dataclass(frozen=True)
+class BandSection:
+    start_hz: float = param(float("nan"), "band start, Hz")
+    end_hz: float = param(float("nan"), "band end, Hz")
+
+
+@dataclass(frozen=True)
+class HbmSection:
+    harmonics: list = param([0, 1, 2, 3], "harmonic list (must include 1)")
+    nt: int = param(0, "time samples per period (0: automatic)", lo=0)
+
+
+@dataclass(frozen=True)
+class OutputSection:
+    dofs: list = param([], "output DOFs")
+    names: list = param([], "output names (default y0, y1, ...)")
+
+
+@dataclass(frozen=True)
+class ContactSection:
+    dofs: list = param([], "per element [t1] or [t1, t2, n] DOFs (-1: no such direction)")
+    other: list = param([], "platform DOFs per element (same shape); empty: against the ground")
+    frames: list = param([], "per element 3x3 rows t1, t2, n when dofs are the node's x, y, z")
+    mu: float = param(0.5, "friction coefficient", lo=0.0)
+    kt_n_per_m: float = param(0.0, "tangential stiffness, N/m", lo=0.0)
+    kt2_n_per_m: float = param(-1.0, "second tangential stiffness, N/m (default: kt_n_per_m)")
+    kn_n_per_m: float = param(0.0, "normal stiffness, N/m", lo=0.0)
+    n0_n: float = param(0.0, "normal preload, N (compressive positive)", lo=0.0)
+    law: str = param("decoupled", "friction law", choices=LAWS)
+
+
+_SECTIONS = {
+    "model": ModelSection,
+    "excitation": ExcitationSection,
+    "band": BandSection,
+    "hbm": HbmSection,
+    "output": OutputSection,
+    "contact": ContactSection,
+    "solver": SolverOptions,
+}
+
+
+@dataclass
+class FrfModel:
+    """Everything ``upd frf`` needs, read from a model file."""
+
+    system: System
+    f1: np.ndarray  # (n,) complex, N per unit level
+    levels: tuple[float, ...]
+    band_hz: tuple[float, float]
+    harmonics: tuple[int, ...]
+    nt: int
+    outputs: np.ndarray  # DOF indices
+    output_names: tuple[str, ...]
+    options: SolverOptions
+    length_unit: str
+    path: Path
+    name: str
+    raw: dict[str, Any] = field(default_factory=dict)
+
+
+def _read_arrays(path: Path) -> dict[str, Any]:
+    if path.suffix == ".npz":
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    if path.suffix in (".h5", ".hdf5"):
+        import h5py
+
+        out: dict[str, Any] = {}
+        with h5py.File(path, "r") as h:
+
+            def visit(name, obj):
+                if isinstance(obj, h5py.Dataset):
+                    out[name] = obj[()]
+
+            h.visititems(visit)
+        return out
+    raise InputError("model.matrices", str(path), "a .npz or .h5/.hdf5 file")
+
+
+def _matrix(arrays: dict[str, Any], name: str, key: str, file: Path):
+    if name in arrays:
+        return arrays[name]
+    parts = [f"{name}{s}" for s in ("_data", "_indices", "_indptr", "_shape")]
+    parts_h5 = [f"{name}/{s}" for s in ("data", "indices", "indptr", "shape")]
+    for p in (parts, parts_h5):
+        if all(q in arrays for q in p):
+            shape = tuple(int(v) for v in arrays[p[3]])
+            return sp.csr_matrix((arrays[p[0]], arrays[p[1]], arrays[p[2]]), shape=shape)
+    names = sorted(
+        {
+            k.split("/")[0].rsplit("_", 1)[0]
+            if k.endswith(("_data", "_indices", "_indptr", "_shape"))
+            else k
+            for k in arrays
+        }
+    )
+    raise InputError(
+        key,
+        name,
+        f"one of the arrays in {file.name}: {', '.join(names)}",
+        did_you_mean(name, names),
+    )
+
+
+def _int_list(key: str, value: Any, n: int, allow_none: bool = False) -> list[int]:
+    if not isinstance(value, list) or not all(
+        isinstance(v, int) and not isinstance(v, bool) for v in value
+    ):
+        raise InputError(key, value, "a list of whole numbers (DOF indices)")
+    lo = -1 if allow_none else 0
+    for i, v in enumerate(value):
+        if not lo <= v < n:
+            raise InputError(f"{key}[{i}]", v, f"a DOF index {lo} <= i < {n}")
+    return list(value)
+
+
+def _float_list(
+    key: str, value: Any, lo: float | None = None, lo_open: bool = False
+) -> list[float]:
+    if not isinstance(value, list):
+        raise InputError(key, value, "a list of numbers")
+    return [check_range(f"{key}[{i}]", v, lo, lo_open=lo_open) for i, v in enumerate(value)]
+
+
+def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) -> FrfModel:
+    """Read and check a model file; ``overrides`` replaces keys (``{"band": {...}}``)."""
+    path = Path(path)
+    data = read_toml(path)
+    for key, val in (overrides or {}).items():
+        data.setdefault(key, {})
+        data[key].update(val)
+    for key in data:
+        if key not in _SECTIONS:
+            raise InputError(
+                key,
+                "[...]",
+                "one of the sections " + ", ".join(_SECTIONS),
+                ("unknown section; " + did_you_mean(key, _SECTIONS)).rstrip("; "),
+            )
+    band = data.get("band", {})
+    for key in ("start_hz", "end_hz"):
+        if not isinstance(band, dict) or key not in band:
+            raise InputError(f"band.{key}", "missing", "a frequency > 0 Hz in the table [band]")
+    sec = {}
+    for key, cls in _SECTIONS.items():
+        if key == "contact":
+            continue
+        tab = data.get(key, {})
+        if not isinstance(tab, dict):
+            raise InputError(key, tab, f"a table [{key}]")
+        sec[key] = load_record(cls, tab, f"{key}.")
+    groups = data.get("contact", [])
+    if isinstance(groups, dict):
+        groups = [groups]
+    if not isinstance(groups, list):
+        raise InputError("contact", groups, "tables [[contact]]")
+    contact = [load_record(ContactSection, g, f"contact[{i}].") for i, g in enumerate(groups)]
+
+    m: ModelSection = sec["model"]
+    if not m.matrices:
+        raise InputError("model.matrices", "", "the name of a .npz or .h5 file")
+    mfile = (path.parent / m.matrices).resolve()
+    if not mfile.is_file():
+        raise InputError(
+            "model.matrices", m.matrices, f"an existing file (looked in {path.parent})"
+        )
+    arrays = _read_arrays(mfile)
+    M = _matrix(arrays, m.mass, "model.mass", mfile)
+    K = _matrix(arrays, m.stiffness, "model.stiffness", mfile)
+    C = _matrix(arrays, m.damping, "model.damping", mfile) if m.damping else None
+    n = M.shape[0]
+    fs = None
+    if m.static_force:
+        fs = np.asarray(_matrix(arrays, m.static_force, "model.static_force", mfile), float).ravel()
+
+    parts = []
+    for i, g in enumerate(contact):
+        where = f"contact[{i}]"
+        if not g.dofs:
+            raise InputError(f"{where}.dofs", [], "DOFs of at least one element")
+        dofs = g.dofs if isinstance(g.dofs[0], list) else [g.dofs]
+        flat = [d for el in dofs for d in (el if isinstance(el, list) else [el])]
+        _int_list(f"{where}.dofs", flat, n, allow_none=True)
+        other = None
+        if g.other:
+            other = g.other if isinstance(g.other[0], list) else [g.other]
+            _int_list(f"{where}.other", [d for el in other for d in el], n, allow_none=True)
+        frames = np.asarray(g.frames, dtype=float) if g.frames else None
+        if g.kt_n_per_m <= 0 and any(len(el) >= 1 and el[0] >= 0 for el in dofs):
+            raise InputError(f"{where}.kt_n_per_m", g.kt_n_per_m, "a tangential stiffness > 0 N/m")
+        kt2 = g.kt_n_per_m if g.kt2_n_per_m < 0 else g.kt2_n_per_m
+        parts.append(
+            ContactElements.from_dofs(
+                n,
+                dofs,
+                other=other,
+                frames=frames,
+                mu=g.mu,
+                kt=g.kt_n_per_m,
+                kt2=kt2,
+                kn=g.kn_n_per_m,
+                n0=g.n0_n,
+                law=g.law,
+            )
+        )
+    elements = ContactElements.concat(parts) if parts else None
+
+    e: ExcitationSection = sec["excitation"]
+    dofs = _int_list("excitation.dofs", e.dofs, n)
+    if not dofs:
+        raise InputError("excitation.dofs", [], "at least one loaded DOF")
+    amps = _float_list("excitation.amplitudes_n", e.amplitudes_n)
+    if len(amps) != len(dofs):
+        raise InputError(
+            "excitation.amplitudes_n", e.amplitudes_n, f"{len(dofs)} values (one per DOF)"
+        )
+    phases = (
+        _float_list("excitation.phases_deg", e.phases_deg) if e.phases_deg else [0.0] * len(dofs)
+    )
+    if len(phases) != len(dofs):
+        raise InputError("excitation.phases_deg", e.phases_deg, f"{len(dofs)} values (one per DOF)")
+    levels = _float_list("excitation.levels", e.levels, 0.0, lo_open=True)
+    if not levels:
+        raise InputError("excitation.levels", [], "at least one level > 0")
+    f1 = np.zeros(n, complex)
+    for d, a, ph in zip(dofs, amps, phases, strict=True):
+        f1[d] += a * np.exp(1j * np.radians(ph))
+
+    b: BandSection = sec["band"]
+    lo = check_range("band.start_hz", b.start_hz, 0.0, lo_open=True, unit="Hz")
+    hi = check_range("band.end_hz", b.end_hz, lo, lo_open=True, unit="Hz")
+
+    h: HbmSection = sec["hbm"]
+    harm = _int_list("hbm.harmonics", h.harmonics, 10_001)
+    o: OutputSection = sec["output"]
+    outs = _int_list("output.dofs", o.dofs, n)
+    if not outs:
+        raise InputError("output.dofs", [], "at least one output DOF")
+    names = tuple(str(v) for v in o.names) if o.names else tuple(f"dof{d}" for d in outs)
+    if len(names) != len(outs):
+        raise InputError("output.names", o.names, f"{len(outs)} names (one per output DOF)")
+
+    system = System(
+        M=M,
+        K=K,
+        C=C,
+        zeta=None if C is not None else m.damping_ratio,
+        contacts=elements,
+        static_force=fs,
+        balance=m.balance,
+    )
+    return FrfModel(
+        system=system,
+        f1=f1,
+        levels=tuple(levels),
+        band_hz=(lo, hi),
+        harmonics=tuple(harm),
+        nt=h.nt,
+        outputs=np.array(outs),
+        output_names=names,
+        options=sec["solver"],
+        length_unit=m.length_unit,
+        path=path,
+        name=path.stem,
+        raw={k: dataclasses.asdict(v) for k, v in sec.items()},
+    )
