@@ -1,0 +1,77 @@
+"""Small MPI helpers on numpy arrays (buffer-based, identical result on every rank)."""
+
+from __future__ import annotations
+
+import sys
+from contextlib import contextmanager
+
+import numpy as np
+
+
+def allsum(comm, a) -> np.ndarray:
+    """Element-wise sum over ranks of a float array (or scalar)."""
+    from mpi4py import MPI
+
+    x = np.ascontiguousarray(a, dtype=np.float64)
+    if comm.size == 1:
+        return x.copy()
+    out = np.empty_like(x)
+    comm.Allreduce(x, out, op=MPI.SUM)
+    return out
+
+
+def allmin(comm, a) -> np.ndarray:
+    from mpi4py import MPI
+
+    x = np.ascontiguousarray(a, dtype=np.float64)
+    out = np.empty_like(x)
+    comm.Allreduce(x, out, op=MPI.MIN)
+    return out
+
+
+def allmax(comm, a) -> np.ndarray:
+    from mpi4py import MPI
+
+    x = np.ascontiguousarray(a, dtype=np.float64)
+    out = np.empty_like(x)
+    comm.Allreduce(x, out, op=MPI.MAX)
+    return out
+
+
+def allrows(comm, a: np.ndarray) -> np.ndarray:
+    """Stack every rank's rows (rank order) on every rank."""
+    parts = comm.allgather(np.asarray(a))
+    return np.concatenate(parts, axis=0) if parts else np.asarray(a)
+
+
+@contextmanager
+def abort_on_failure(comm=None):
+    """Under MPI, turn an error raised on some ranks only into an abort of all ranks.
+
+    A WorkbenchError raised by the library is raised on every rank at once
+    (the checks are collective), so it passes through. Anything else (a
+    PETSc error on one rank, a bug) would leave the other ranks waiting in
+    a collective call for ever: report it in one line and abort the job.
+    """
+    from ..errors import WorkbenchError
+
+    try:
+        yield
+    except (WorkbenchError, KeyboardInterrupt):
+        raise
+    except Exception as e:
+        if comm is None:
+            from mpi4py import MPI
+
+            comm = MPI.COMM_WORLD
+        if comm.size == 1:
+            raise
+        sys.stderr.write(f"[{comm.rank}] error: {type(e).__name__}: {e} (aborting all ranks)\n")
+        sys.stderr.flush()
+        comm.Abort(1)
+
+
+def info(log, comm, msg: str, *args) -> None:
+    """``log.info`` on rank 0 only (every rank computes the same thing)."""
+    if comm is None or comm.rank == 0:
+        log.info(msg, *args)
