@@ -170,6 +170,28 @@ def test_status_classification_cases():
 
 
 @pytest.mark.parametrize("law", ["decoupled", "circular"])
+def test_elastic_shakedown_is_stuck(law):
+    """Slip only while the march starts, then a loop that just touches the limit: stuck.
+
+    u = U0 + A cos: the element starts from rest, so its first sample carries
+    kt (U0 + A) > mu N and slips; afterwards the force swings by 2 kt A < 2 mu N
+    and the converged period touches the limit (to round-off) without slipping.
+    The status must say stuck and the converged loop must dissipate nothing.
+    """
+    mu, kt, n0 = 0.5, 1e5, 2.0  # slip distance mu n0 / kt = 1e-5 m
+    el = ContactElements.from_dofs(3, [[0, 1, 2]], mu=mu, kt=kt, kn=2e5, n0=n0, law=law)
+    nt = 64
+    c = np.cos(2 * np.pi * np.arange(nt) / nt)
+    u = np.stack([8e-6 + 6e-6 * c, 0 * c, 0 * c], -1)  # kt (U0 + A) = 1.4 mu n0
+    out = march_samples(u[None], el)
+    T = out["f"][0, :, 0]
+    assert np.isclose(T.max(), mu * n0, rtol=1e-12)  # shaken down onto the limit
+    assert classify(out["n_slip"], out["n_sep"], nt)[0] == STUCK
+    du = np.diff(np.append(u[:, 0], u[0, 0]))
+    assert abs(np.sum(0.5 * (T + np.roll(T, -1)) * du)) < 1e-12 * mu * n0 * 6e-6
+
+
+@pytest.mark.parametrize("law", ["decoupled", "circular"])
 def test_energy_per_cycle_is_the_jenkins_loop_area(law):
     """Harmonic tangential motion, constant N: dissipation 4 mu N (x - mu N / kt).
 
@@ -247,3 +269,30 @@ def test_bad_elements_are_refused_with_the_parameter(kw, param):
     with pytest.raises(InputError) as e:
         ContactElements.from_dofs(4, dofs, **args)
     assert e.value.param == param
+
+
+def test_loop_dissipation_is_never_negative_and_matches_the_loop_area():
+    """Per-element friction energy (trapezoid on the converged loop) is a dissipation.
+
+    Constant N: it equals the Jenkins loop area 4 mu N (x - mu N / kt) to the
+    trapezoid error. With the contact opening for part of the period (tangential
+    and normal motion out of phase) the force jumps to zero; whatever the phase,
+    the energy taken by the element over a cycle stays >= 0.
+    """
+    from workbench.hbm.balance import loop_dissipation
+
+    mu, kt, kn, n0 = 0.5, 1e5, 2e5, 2.0
+    el = ContactElements.from_dofs(3, [[0, 1, 2]], mu=mu, kt=kt, kn=kn, n0=n0)
+    nt = 1024
+    tau = 2 * np.pi * np.arange(nt) / nt
+    x = 3e-5
+    u = np.stack([x * np.cos(tau), 0 * tau, 0 * tau], -1)
+    out = march_samples(u[None], el)
+    exact = 4 * mu * n0 * (x - mu * n0 / kt)
+    assert abs(loop_dissipation(u[None], out["f"])[0] - exact) < 1e-4 * exact
+    for phase in np.linspace(0, 2 * np.pi, 13):
+        un = 1.5e-5 * np.cos(tau + phase)  # opens for part of the period (n0 / kn = 1e-5)
+        u = np.stack([x * np.cos(tau), 0 * tau, un], -1)
+        out = march_samples(u[None], el)
+        assert out["n_sep"][0] > 0
+        assert loop_dissipation(u[None], out["f"])[0] >= -1e-12 * exact

@@ -4,7 +4,8 @@
   lies between 350 and 450 Hz (the paper's is about 409 Hz) for every damper;
 * item 6: the Craig-Bampton rig + damper (12 modes each) reproduce the
   first six stuck frequencies of the unreduced FE model within 0.1 %, and
-  the rigid damper agrees with the flexible one where the damper is stiff.
+  the rigid damper agrees with the flexible one where the damper is stiff
+  compared with its contacts.
 """
 
 from __future__ import annotations
@@ -33,20 +34,30 @@ def test_stuck_out_of_phase_near_the_papers(tmp_path, damper):
 
 
 def test_reduced_and_rigid_match_full_on_the_default_cone_rig(tmp_path):
-    """First 6 stuck frequencies: CB within 0.1 % of full FE (from above); rigid within 0.1 %.
+    """First 6 stuck frequencies: CB within 0.1 % of full FE (from above); rigid damper.
 
-    The damper's first free-free elastic mode is near 42 kHz, far above the
-    coupled modes (< 1 kHz), hence the rigid damper's small error.
+    The rigid damper must agree where the damper is stiff *relative to its
+    contacts*. With soft contact springs (2.7e7 N/m per m of line, 1e6 N/m a
+    line; the damper's first free-free elastic mode is near 42 kHz) it is
+    within 0.1 % of the flexible one. With the default, Hertz-level stiffness
+    (6e10 N/m per m, 2.4e9 N/m a line) the damper's own compliance is of the
+    order of its contacts' and the rigid damper is stiffer: by Rayleigh's
+    principle never softer than the flexible one (4.9 % on the out-of-phase
+    mode when this was written), which the fidelity study charts.
     """
     geom = build_geometry("cone", tmp_path / "geometry")
-    full = compute_modes(geom, contact="stuck", n=6, contact_params=PARAMS, shapes=False)
+    soft = load_contact_params(kt_line_n_per_m2=2.7e7, kn_line_n_per_m2=2.7e7)
     rig = reduce_body(geom, "rig", cache_dir=tmp_path / "fe")
-    f = {}
-    for rigid in (False, True):
-        dmp = reduce_body(geom, "damper", rigid=rigid, cache_dir=tmp_path / "fe")
-        K, M = stuck_reduced_system(rig, dmp, geom.contact, PARAMS)
-        lam = sl.eigh(K, M, eigvals_only=True, subset_by_index=[0, 5])
-        f[rigid] = np.sqrt(lam) / (2 * np.pi)
-    rel_cb = f[False] / full.freqs_hz - 1
-    assert np.all(rel_cb < 1e-3) and np.all(rel_cb > -1e-8), rel_cb
-    assert np.allclose(f[True], full.freqs_hz, rtol=1e-3, atol=0)
+    dampers = {r: reduce_body(geom, "damper", rigid=r, cache_dir=tmp_path / "fe")
+               for r in (False, True)}
+
+    def reduced_hz(params, rigid):
+        K, M = stuck_reduced_system(rig, dampers[rigid], geom.contact, params)
+        return np.sqrt(sl.eigh(K, M, eigvals_only=True, subset_by_index=[0, 5])) / (2 * np.pi)
+
+    for params in (PARAMS, soft):
+        full = compute_modes(geom, contact="stuck", n=6, contact_params=params, shapes=False)
+        rel_cb = reduced_hz(params, False) / full.freqs_hz - 1
+        assert np.all(rel_cb < 1e-3) and np.all(rel_cb > -1e-8), rel_cb
+    assert np.allclose(reduced_hz(soft, True), reduced_hz(soft, False), rtol=1e-3, atol=0)
+    assert np.all(reduced_hz(PARAMS, True) >= reduced_hz(PARAMS, False) * (1 - 1e-9))

@@ -26,8 +26,11 @@ TOL_MM = 1e-6
 
 
 # A wide groove (80 mm between the blades, 4 mm tip gap) that seats every cone
-# of the angle sweeps below, so those tests are about tangency, not fitting.
-WIDE = {"blade": {"gap_mm": 80.0}, "platform": {"overhang_mm": 38.0, "width_mm": 80.0},
+# of the angle sweeps below, so those tests are about tangency, not fitting
+# (platforms high on the blades: at beta = 20 deg their inclined faces are
+# 104 mm deep).
+WIDE = {"blade": {"gap_mm": 80.0},
+        "platform": {"overhang_mm": 38.0, "width_mm": 80.0, "top_below_tip_mm": 60.0},
         "base": {"length_mm": 200.0, "width_mm": 100.0}}
 
 
@@ -204,16 +207,17 @@ def test_wedge_volume_from_its_section():
     ("cone", {"cone": {"r1_mm": 18.0, "length_mm": 20.0}}, "cone.length_mm"),  # hits blades
     ("cylinder", {"cylinder": {"radius_mm": 3.0}}, "cylinder.radius_mm"),
     ("cylinder", {"cylinder": {"radius_mm": 25.0}}, "cylinder.radius_mm"),
-    ("cylinder", {"cylinder": {"length_mm": 60.0}}, "cylinder.length_mm"),
+    ("cylinder", {"cylinder": {"length_mm": 110.0}}, "cylinder.length_mm"),
     ("wedge", {"wedge": {"top_width_mm": 4.0}}, "wedge.top_width_mm"),
     ("wedge", {"wedge": {"face_width_mm": 30.0}}, "wedge.face_width_mm"),
-    ("wedge", {"wedge": {"length_mm": 49.5}}, "wedge.length_mm"),
+    ("wedge", {"wedge": {"length_mm": 99.5}}, "wedge.length_mm"),
     ("cone", {"rig": {"platform": {"overhang_mm": 20.0}}}, "rig.platform.overhang_mm"),
-    ("cone", {"rig": {"platform": {"top_below_tip_mm": 170.0}}},
+    ("cone", {"rig": {"platform": {"top_below_tip_mm": 300.0}}},
      "rig.platform.top_below_tip_mm"),
     ("cone", {"rig": {"base": {"length_mm": 60.0}}}, "rig.base.length_mm"),
-    ("cone", {"rig": {"response": {"height_mm": 200.0}}}, "rig.response.height_mm"),
+    ("cone", {"rig": {"response": {"height_mm": 320.0}}}, "rig.response.height_mm"),
     ("cone", {"rig": {"blade": {"height_mm": 25.0}, "excitation": {"height_mm": 5.0},
+                      "platform": {"top_below_tip_mm": 0.0},
                       "response": {"height_mm": 10.0}}}, "rig.blade.height_mm"),  # hits the base
 ])
 def test_dampers_that_do_not_fit_are_refused_naming_the_parameter(damper, tables, param):
@@ -241,7 +245,7 @@ def test_dampers_that_do_not_fit_are_refused_naming_the_parameter(damper, tables
     # slivers: a step between faces is either absent or at least rig.fit.min_feature_mm
     ("cone", {"rig": {"platform": {"tip_thickness_mm": 0.2}}}, "rig.platform.tip_thickness_mm"),
     ("cone", {"rig": {"platform": {"top_below_tip_mm": 0.2}}}, "rig.platform.top_below_tip_mm"),
-    ("cone", {"rig": {"platform": {"width_mm": 50.6}}}, "rig.platform.width_mm"),
+    ("cone", {"rig": {"platform": {"width_mm": 100.6}}}, "rig.platform.width_mm"),
     ("cone", {"rig": {"base": {"width_mm": 50.4}}}, "rig.base.width_mm"),
     ("cone", {"rig": {"base": {"length_mm": 70.2}}}, "rig.base.length_mm"),
     ("wedge", {"wedge": {"skirt_height_mm": 0.2}}, "wedge.skirt_height_mm"),
@@ -287,8 +291,8 @@ def test_files_and_record_defaults_agree(name, record):
 def test_steps_below_the_cad_tolerance_are_closed():
     """A 1e-9 mm step is no step: the faces are drawn flush instead of as a sliver."""
     lay = layout("wedge", wedge={"skirt_height_mm": 1e-9},
-                 rig={"base": {"width_mm": 50.0 + 1e-9},
-                      "platform": {"top_below_tip_mm": 1e-9, "width_mm": 50.0 - 1e-9}})
+                 rig={"base": {"width_mm": 100.0 + 1e-9},
+                      "platform": {"top_below_tip_mm": 1e-9, "width_mm": 100.0 - 1e-9}})
     assert len(lay.damper["section_xz"]) == 4  # no vertical sides
-    assert lay.base.dy == 50.0 and lay.platform_y == (-25.0, 25.0)
+    assert lay.base.dy == 100.0 and lay.platform_y == (-50.0, 50.0)
     assert lay.platform_xz[0][:, 1].max() == lay.blades[0].z0 + lay.blades[0].dz

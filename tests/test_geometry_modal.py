@@ -77,5 +77,6 @@ def test_free_blades_first_bending_near_the_papers_in_phase_frequency(tmp_path):
     for _, shape in modes[:2]:
         dom = np.abs(shape[top]).mean(axis=0)
         assert dom[0] > 3 * dom[1]  # x dominates over y at the blade tips
-    # next pair: bending in y (the blades are 50 mm wide against 15 mm thick)
-    assert f[2] > 2.5 * f[1], f
+    # next pair: bending in y (the blades are 100 mm wide against 40 mm thick: 2.5 times
+    # the frequency for clamped beams, a little less with the root's compliance in the base)
+    assert f[2] > 2.0 * f[1], f

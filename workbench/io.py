@@ -83,3 +83,19 @@ def file_digest(path: str | Path, n: int = 16) -> str:
         for chunk in iter(lambda: fh.read(1 << 20), b""):
             h.update(chunk)
     return h.hexdigest()[:n]
+
+
+def code_version(package_dir: str | Path, names: tuple[str, ...] | None = None,
+                 tag: str = "") -> str:
+    """Package version plus a hash of the sources that produce a cached result.
+
+    ``names``: the files of ``package_dir`` that count (default: every
+    ``*.py`` in it). A change to any of them changes the version, so every
+    cache keyed on it is rebuilt.
+    """
+    from . import __version__
+
+    here = Path(package_dir)
+    files = sorted(here.glob("*.py")) if names is None else [here / n for n in names]
+    parts = [file_digest(f, 8) for f in files if f.is_file()]
+    return f"{__version__}+{tag}{digest(parts, 8)}"

@@ -24,9 +24,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import __version__
 from ..errors import InputError, SolveError, check_choice, check_int
-from ..io import atomic_path, digest, file_digest
+from ..io import atomic_path, digest
+from ..io import code_version as _code_version
 from ..log import stage
 from ..reduced import ReducedModel
 from .parallel import info
@@ -41,9 +41,7 @@ RIGID_RATIO = 1e-6  # six eigenvalues below this fraction of the first elastic o
 
 def code_version() -> str:
     """Package version plus a hash of the FE sources that produce a reduced model."""
-    here = Path(__file__).resolve().parent
-    parts = [file_digest(here / name, 8) for name in _SOURCES if (here / name).is_file()]
-    return f"{__version__}+fe{digest(parts, 8)}"
+    return _code_version(Path(__file__).resolve().parent, _SOURCES, "fe")
 
 
 def reduce_inputs(geom, body: str, n_modes: int, rigid: bool) -> dict[str, Any]:

@@ -23,9 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import __version__
 from ..errors import InputError, SolveError, WorkbenchError
-from ..io import digest, file_digest
+from ..io import code_version as _code_version
+from ..io import digest
 from ..log import mpi_size
 from .layout import Layout, make_layout
 from .params import GeometryParams, load_geometry_params
@@ -39,9 +39,7 @@ MATCH_TOL_M = 1e-9  # a contact point must be a vertex of both meshes to this di
 
 def code_version() -> str:
     """Package version plus a hash of this sub-package's sources (the cache key's code part)."""
-    here = Path(__file__).resolve().parent
-    parts = [file_digest(here / name, 8) for name in _SOURCES if (here / name).is_file()]
-    return f"{__version__}+{digest(parts, 8)}"
+    return _code_version(Path(__file__).resolve().parent, _SOURCES)
 
 
 def geometry_digest(gp: GeometryParams) -> str:

@@ -50,9 +50,9 @@ class Material:
 class Base:
     """The base block (the 'disc'), clamped on its bottom face z = 0."""
 
-    length_mm: float = param(110.0, "extent along x (tangential), mm", lo=0.0, lo_open=True)
-    width_mm: float = param(70.0, "extent along y (axial), mm", lo=0.0, lo_open=True)
-    height_mm: float = param(30.0, "extent along z (radial), mm", lo=0.0, lo_open=True)
+    length_mm: float = param(180.0, "extent along x (tangential), mm", lo=0.0, lo_open=True)
+    width_mm: float = param(140.0, "extent along y (axial), mm", lo=0.0, lo_open=True)
+    height_mm: float = param(50.0, "extent along z (radial), mm", lo=0.0, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -60,10 +60,10 @@ class Blade:
     """The two beam-like blades, standing on the base, mirror images about x = 0."""
 
     thickness_mm: float = param(
-        15.0, "extent along x, the bending direction of the first mode, mm", lo=0.0, lo_open=True)
-    width_mm: float = param(50.0, "extent along y (axial), mm", lo=0.0, lo_open=True)
+        40.0, "extent along x, the bending direction of the first mode, mm", lo=0.0, lo_open=True)
+    width_mm: float = param(100.0, "extent along y (axial), mm", lo=0.0, lo_open=True)
     height_mm: float = param(
-        180.0, "span along z from the base top to the blade tip, mm", lo=0.0, lo_open=True)
+        313.0, "span along z from the base top to the blade tip, mm", lo=0.0, lo_open=True)
     gap_mm: float = param(
         40.0, "clear distance between the inner faces of the two blades, mm",
         lo=0.0, lo_open=True)
@@ -83,8 +83,8 @@ class Platform:
         6.0, "height of the platform's vertical tip face (above the inclined face), mm",
         lo=0.0, lo_open=True)
     top_below_tip_mm: float = param(
-        0.0, "distance from the blade tip down to the platform's top face, mm", lo=0.0)
-    width_mm: float = param(50.0, "extent along y, centred on the blade, mm", lo=0.0, lo_open=True)
+        221.0, "distance from the blade tip down to the platform's top face, mm", lo=0.0)
+    width_mm: float = param(100.0, "extent along y, centred on the blade, mm", lo=0.0, lo_open=True)
 
 
 @dataclass(frozen=True)
@@ -95,7 +95,7 @@ class Excitation:
     (the bending direction of the first mode).
     """
 
-    height_mm: float = param(60.0, "height above the base top, mm", lo=0.0, lo_open=True)
+    height_mm: float = param(273.0, "height above the base top, mm", lo=0.0, lo_open=True)
     y_mm: float = param(0.0, "axial position (0 = blade centre), mm")
 
 
@@ -103,7 +103,7 @@ class Excitation:
 class Response:
     """Where the response is read: a point on the outer face of each blade, along x."""
 
-    height_mm: float = param(170.0, "height above the base top, mm", lo=0.0, lo_open=True)
+    height_mm: float = param(303.0, "height above the base top, mm", lo=0.0, lo_open=True)
     y_mm: float = param(0.0, "axial position (0 = blade centre), mm")
 
 
@@ -111,7 +111,7 @@ class Response:
 class MeshSizes:
     """Target element sizes (gmsh) of the second-order tetrahedral meshes."""
 
-    size_mm: float = param(4.5, "global element size of the rig, mm", lo=0.0, lo_open=True)
+    size_mm: float = param(9.0, "global element size of the rig, mm", lo=0.0, lo_open=True)
     contact_size_mm: float = param(
         1.5, "element size at the contact points (rig and damper), mm", lo=0.0, lo_open=True)
     refine_distance_mm: float = param(

@@ -8,8 +8,10 @@ options). Cases sharing a model part share the meshing and the reduction.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from ..io import digest
@@ -48,13 +50,34 @@ class Case:
                 **{k: self.settings[k] for k in SOLVE_KEYS}}
 
 
+def solver_code_version() -> str:
+    """A hash of the sources that turn a reduced model into a case's curve.
+
+    Part of every case's cache key: a change to the contact law, the
+    harmonic balance, the assembly or this runner recomputes the cases
+    (the meshes and reduced models have their own keys and stay).
+    """
+    from ..io import code_version
+
+    root = Path(__file__).resolve().parents[1]
+    parts = [code_version(root / pkg) for pkg in ("contact", "hbm", "assembly")]
+    parts.append(code_version(root / "studies", ("plan.py", "runner.py")))
+    return digest(parts, 12)
+
+
 def make_case(damper: str, phase: float, force: float, settings: dict[str, Any],
               variant: str = "") -> Case:
     c = Case(damper, float(phase), float(force), dict(settings), variant)
     md = digest(c.model_params())
     object.__setattr__(c, "model_digest", md)
-    object.__setattr__(c, "digest", digest({"model": md, "solve": c.solve_params()}))
+    object.__setattr__(c, "digest", digest({"model": md, "solve": c.solve_params(),
+                                            "code": _SOLVER_CODE()}))
     return c
+
+
+@functools.lru_cache(maxsize=1)
+def _SOLVER_CODE() -> str:  # noqa: N802 - a constant computed once per process
+    return solver_code_version()
 
 
 def plan(spec: StudySpec) -> list[Case]:
