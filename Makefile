@@ -17,13 +17,13 @@ export PYVISTA_OFF_SCREEN ?= true
 setup:
 	@sh scripts/setup.sh
 
-## the main job
+## the main job: the paper's damper comparison, cases spread over $(NP) MPI ranks
 run: setup
-	$(UPD) analytic --out $(OUT)/analytic
+	$(MPIRUN) $(UPD) study studies/paper.toml --out $(OUT)/paper
 
 ## the default (fast) test suite
 test: setup
-	$(PY) -m pytest -q -n 2
+	$(PY) -m pytest -q -n 2 --dist loadgroup
 
 ## the slow tests (run with the benchmarks)
 test-slow: setup

@@ -40,6 +40,8 @@ def run(args: argparse.Namespace, ctx) -> dict:
     summary = {
         "study": spec.name, "kind": spec.kind, "out": str(out),
         "report": str(out / "report.html"), "n_cases": len(results.cases),
+        "n_computed": results.extras.get("n_computed"),
+        "n_reused": results.extras.get("n_reused"),
         "timings_s": {k: round(v, 2) for k, v in results.timings.items()},
         "cases": results.summaries(),
     }

@@ -82,7 +82,8 @@ OWN_TABLE_PREFIXES = ("peak_amplitude_", "peak_frequency_", "friction_energy_",
                       "status_shares_", "sweep_", "cases.")
 MODES_PREFIX = "modes_"
 # also what workbench.render.modes.render_modes names its files, if written into figures/
-MODE_FILE_PREFIXES = ("first_bending", MODES_PREFIX, "mode_")
+MODEL_PREFIX = "model_"
+MODE_FILE_PREFIXES = (MODEL_PREFIX, "first_bending", MODES_PREFIX, "mode_")
 _LINE_WORDS = {"-": "solid", "--": "dashed", ":": "dotted", "-.": "dash-dot"}
 
 
@@ -393,12 +394,19 @@ def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
 def _mode_caption(stem: str) -> str:
     """'first_bending' -> 'First bending, in-phase and out-of-phase'; 'mode_03' -> 'Mode 3';
     'modes_in-phase' -> 'Mode shape, in-phase'."""
+    if stem.startswith(MODEL_PREFIX):
+        return (f"The rig with the {stem[len(MODEL_PREFIX):]} damper seated in the groove; "
+                "contact points marked on both platforms")
     if stem.startswith("first_bending"):
-        return "First bending, in-phase and out-of-phase"
+        return ("First bending, in-phase and out-of-phase: deformed rig and damper coloured "
+                "by displacement magnitude")
     if stem.startswith(MODES_PREFIX):
-        return "Mode shape, " + stem[len(MODES_PREFIX):].replace("_", " ")
+        return (f"First bending with the {stem[len(MODES_PREFIX):].replace('_', ' ')} damper "
+                "stuck, in-phase (left) and out-of-phase (right): deformed shapes coloured by "
+                "displacement magnitude")
     tail = stem[len("mode_"):]
-    return f"Mode {int(tail)}" if tail.isdigit() else "Mode " + tail.replace("_", " ")
+    name = f"Mode {int(tail)}" if tail.isdigit() else "Mode " + tail.replace("_", " ")
+    return name + ": deformed rig and damper coloured by displacement magnitude"
 
 
 def _found_files(b: _Builder) -> tuple[_Section | None, _Section | None]:
@@ -417,15 +425,14 @@ def _found_files(b: _Builder) -> tuple[_Section | None, _Section | None]:
     other_tables = [p for p in csvs if not p.name.startswith(OWN_TABLE_PREFIXES)]
     mode_sec = other_sec = None
     if modes:
-        mode_sec = _Section("modes", "Mode shapes",
-                            ["First bending modes of the blades with the damper: in-phase "
-                             "(the platform edges move radially relative to each other) and "
-                             "out-of-phase (they open and close the groove); deformed shapes "
-                             "coloured by displacement magnitude."])
+        mode_sec = _Section("modes", "The model: rig, dampers, first bending modes",
+                            ["Each damper seated in the groove between the two platforms, "
+                             "and the first bending modes of the blades with it stuck: "
+                             "in-phase (the facing platform edges move radially relative to "
+                             "each other) and out-of-phase (they open and close the groove)."])
         for p in modes:
             mode_sec.figures.append({"path": f"{FIGURES}/{p.name}",
-                                     "caption": f"{_mode_caption(p.stem)}: deformed rig and "
-                                                "damper coloured by displacement magnitude."})
+                                     "caption": _mode_caption(p.stem) + "."})
     if other or other_tables:
         other_sec = _Section("other-figures", "Other figures and tables")
         for p in other:

@@ -50,6 +50,7 @@ class PreparedModel:
     system: Any  # hbm System
     bands: dict[float, tuple[float, float, dict[str, float]]]
     timings: dict[str, float]
+    contact_params: Any = None
 
 
 def _comm():
@@ -109,13 +110,14 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
                              cache_dir=fe_dir, comm=comm, force=force)
     with stage(timings, "assembly"):
         beta = float(geom.params["rig"]["platform"]["angle_deg"])
-        model = assemble(rig, damper, geom.contact, contact_params_for(case), beta_deg=beta,
+        cparams = contact_params_for(case)
+        model = assemble(rig, damper, geom.contact, cparams, beta_deg=beta,
                          excitation_direction=tuple(geom.excitation_direction),
                          response_direction=tuple(geom.response_direction))
         contacts = ContactElements(W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt,
                                    kn=model.kn, n0=model.n0)
         system = System(M=model.M, K=model.K, zeta=s["damping"], contacts=contacts)
-    return PreparedModel(geom, gdir, model, system, {}, timings)
+    return PreparedModel(geom, gdir, model, system, {}, timings, cparams)
 
 
 def band_for(prep: PreparedModel, case: Case) -> tuple[float, float]:
@@ -181,7 +183,11 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
 
     # 1. models: every rank takes part (dolfinx is parallel); all are cached on disk
     prepared: dict[str, PreparedModel] = {}
-    todo = [c for c in cases if force or not _done(case_dir, c)]
+    # rank 0 decides what is left to do, so every rank agrees on the split
+    todo_ids = [c.digest for c in cases if force or not _done(case_dir, c)] if rank == 0 else None
+    if comm is not None:
+        todo_ids = comm.bcast(todo_ids, root=0)
+    todo = [c for c in cases if c.digest in set(todo_ids)]
     need_models = list(dict.fromkeys(c.model_digest for c in todo))
     for md in need_models:
         c = next(x for x in todo if x.model_digest == md)
@@ -213,6 +219,11 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
                 log.info("case %d/%d done: %s (%d points, %.1f s)", k + 1, len(mine), c.name,
                          res.branch.n_points, res.timings["hbm"])
     timings["cases (wall)"] = time.perf_counter() - t_cases
+    t_pic = time.perf_counter()
+    for prep in prepared.values():
+        model_pictures(prep, out, comm=comm)
+    if prepared:
+        timings["model pictures"] = time.perf_counter() - t_pic
     if comm is not None:
         failures = sum(comm.allgather(failures), [])
         comm.Barrier()
@@ -227,10 +238,60 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         results.extras["bands"] = {
             md: {str(ph): list(b) for ph, b in p.bands.items()} for md, p in prepared.items()}
         results.extras["failures"] = failures
+        results.extras["n_computed"] = len(todo)
+        results.extras["n_reused"] = len(cases) - len(todo)
         write_outputs(results, spec, out, prepared)
         timings["post and report"] = time.perf_counter() - t_post
     timings["total"] = time.perf_counter() - t_start
     return results
+
+
+def model_pictures(prep: PreparedModel, out: Path, *, comm=None) -> None:
+    """The rig with the damper, and its stuck first bending modes, for the report.
+
+    ``figures/model_<damper>.png`` and ``figures/modes_<damper>.png``; done
+    again only when the geometry or the contact parameters changed (their
+    digest is kept beside, in ``figures/.model_<damper>.json``). The modes
+    are those of the full FE model with the damper stuck (every rank takes
+    part); rank 0 draws.
+    """
+    import json
+
+    from ..fe.modes import compute_modes
+
+    damper = prep.geometry.damper
+    figs = out / "figures"
+    stamp = figs / f".model_{damper}.json"
+    params = prep.contact_params
+    key = digest({"geometry": prep.geometry.digest, "contact": params})
+    rank = 0 if comm is None else comm.rank
+    fresh = False
+    if rank == 0:
+        try:
+            fresh = json.loads(stamp.read_text()).get("key") == key and all(
+                (figs / f"{k}_{damper}.png").is_file() for k in ("model", "modes"))
+        except (OSError, ValueError):
+            fresh = False
+    if comm is not None:
+        fresh = comm.bcast(fresh, root=0)
+    if fresh:
+        return
+    res = compute_modes(prep.geometry, contact="stuck", n=4, contact_params=params, comm=comm)
+    if rank == 0:
+        import shutil
+        import tempfile
+
+        from ..render.modes import render_modes
+        from ..render.scene import render_scene
+
+        figs.mkdir(parents=True, exist_ok=True)
+        render_scene(prep.geometry, figs / f"model_{damper}.png",
+                     title=f"rig with the {damper} damper")
+        with tempfile.TemporaryDirectory() as tmp:
+            made = [p for p in render_modes(res, tmp, modes=[]) if p.name == "first_bending.png"]
+            if made:
+                shutil.copyfile(made[0], figs / f"modes_{damper}.png")
+        write_json(stamp, {"key": key})
 
 
 def _done(case_dir: Path, c: Case) -> bool:
