@@ -78,25 +78,49 @@ def test_report_refuses_missing_folder_and_figure(tmp_path):
     assert r.code == 2 and "figures/second.png" in r.err and "Traceback" not in r.err
 
 
+def _chromium(flags: list[str], url: str, tmp_path: Path, check) -> object:
+    """Run headless chromium until ``check(stdout)`` holds, at most three times.
+
+    Headless chromium may dump the page or take the screenshot before the
+    load event when the machine is saturated (CI runs two test workers on
+    two cores), even with a virtual-time budget. A retry absorbs that
+    timing; what is asserted of the page is unchanged.
+    """
+    out = None
+    for attempt in range(3):
+        profile = f"--user-data-dir={tmp_path / f'profile{attempt}'}"
+        r = subprocess.run(["chromium", *CHROMIUM_FLAGS, profile, "--virtual-time-budget=10000",
+                            *flags, url], capture_output=True, text=True, timeout=180)
+        out = check(r.stdout)
+        if out:
+            return out
+    return out
+
+
 def test_headless_chromium_renders_first_figure(tmp_path):
     # scripts/setup.sh installs Debian's chromium: its absence is a broken setup, not a skip
     assert shutil.which("chromium"), "chromium missing: run scripts/setup.sh"
     d = _study_dir(tmp_path / "study")
     assert run_upd("report", d).code == 0
     url = (d / "report.html").as_uri()
-    flags = CHROMIUM_FLAGS + [f"--user-data-dir={tmp_path / 'profile'}"]
-    dom = subprocess.run(["chromium", *flags, "--virtual-time-budget=5000", "--dump-dom", url],
-                         capture_output=True, text=True, timeout=120).stdout
     # the page's load handler records the decoded size of the first figure
-    assert 'data-first-figure="600x400"' in dom, dom[:500]
-    shot = tmp_path / "shot.png"
-    # the virtual-time budget lets the page load and decode its images before the
-    # screenshot, however loaded the machine is
-    subprocess.run(["chromium", *flags, "--virtual-time-budget=5000", "--window-size=1200,900",
-                    f"--screenshot={shot}", url], capture_output=True, timeout=120)
+    dom = _chromium(["--dump-dom"], url, tmp_path,
+                    lambda out: out if 'data-first-figure="600x400"' in out else None)
+    assert dom, "chromium never recorded the first figure's decoded size (600x400)"
     import matplotlib.image as mpimg
 
-    img = np.asarray(mpimg.imread(str(shot)))[..., :3]
-    red = (img[..., 0] > 0.85) & (img[..., 1] < 0.2) & (img[..., 2] < 0.2)
-    # the first figure's thick pure-red line is on screen (hundreds of pixels)
-    assert red.sum() > 500, red.sum()
+    shot = tmp_path / "shot.png"
+
+    def red_pixels(_out: str) -> int:
+        if not shot.exists():
+            return 0
+        img = np.asarray(mpimg.imread(str(shot)))[..., :3]
+        red = (img[..., 0] > 0.85) & (img[..., 1] < 0.2) & (img[..., 2] < 0.2)
+        n = int(red.sum())
+        shot.unlink()
+        # the first figure's thick pure-red line is on screen (hundreds of pixels)
+        return n if n > 500 else 0
+
+    n_red = _chromium(["--window-size=1200,900", f"--screenshot={shot}"], url, tmp_path,
+                      red_pixels)
+    assert n_red > 500, "the screenshot never showed the first figure's red line"

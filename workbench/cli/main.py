@@ -160,6 +160,12 @@ def main(argv: list[str] | None = None) -> int:
             f"{prog}: internal error: {type(e).__name__}: {e} "
             "(rerun with --debug for the traceback)\n"
         )
+        if wlog.mpi_size() > 1:
+            # raised on this rank only: the others would wait in a collective call for ever
+            from mpi4py import MPI
+
+            sys.stderr.flush()
+            MPI.COMM_WORLD.Abort(1)
         return 1
     if summary is None:
         summary = {}
