@@ -66,3 +66,47 @@ def test_sweep_plans_one_case_per_value_and_changes_only_the_model_key():
     assert [c.settings["cf"] for c in cases] == [100.0, 300.0]
     assert cases[0].model_digest != cases[1].model_digest
     assert cases[0].variant == "cf=100"
+
+
+def _case_studies() -> list:
+    """Shipped study files whose cases plan() lays out (comparisons and sweeps).
+
+    The fidelity and robustness studies plan their own cases and are tested
+    in their own files; other TOML files in studies/ are geometry overrides.
+    """
+    import tomllib
+
+    return [p for p in sorted((ROOT / "studies").glob("*.toml"))
+            if tomllib.loads(p.read_text()).get("kind", "") in ("comparison", "sweep")]
+
+
+def test_the_shipped_case_studies_are_found():
+    names = {p.name for p in _case_studies()}
+    assert {"paper.toml", "cf_sweep.toml", "cone_angle_sweep.toml"} <= names
+
+
+@pytest.mark.parametrize("path", _case_studies(), ids=lambda p: p.name)
+def test_shipped_study_files_load_and_every_case_fits_the_groove(path):
+    """Each study file we ship is valid, and every planned geometry passes the layout checks.
+
+    make_layout runs the same fit checks as meshing (damper inside the groove,
+    clear of the blades) without gmsh, so a sweep value that cannot be built
+    is caught here rather than minutes into a run.
+    """
+    from workbench.geometry.layout import make_layout
+    from workbench.geometry.params import load_geometry_params
+    from workbench.studies.runner import geometry_request
+
+    spec = load_study(path)
+    cases = plan(spec)
+    assert cases, path.name
+    seen = set()
+    for c in cases:
+        req = geometry_request(c)
+        key = repr(req)
+        if key in seen:
+            continue
+        seen.add(key)
+        gp = load_geometry_params(req["damper"], req["geometry_file"], req["overrides"],
+                                  req["size_mm"])
+        make_layout(gp)
