@@ -18,6 +18,10 @@ the ranks. The run ends with DIR/report.html.
 examples:
   upd study studies/paper.toml --out results/paper
   upd study studies/paper.toml --dampers cone --forces 9.6,30 --out results/cone
+  upd study studies/fidelity.toml --tolerance 1%    # knob ladders vs a reference, Pareto
+                                                    # front, cheapest setting within 1%
+  upd study studies/robustness.toml --out results/robustness   # solution methods x hard
+                                                    # cases: the map of success and failure
   mpirun -n 2 --allow-run-as-root --oversubscribe upd study studies/paper.toml"""
 
 
@@ -36,6 +40,14 @@ def run(args: argparse.Namespace, ctx) -> dict:
 
     spec = load_study(args.file, cli_values(args))
     out = ctx.out_dir(f"results/{spec.name}")
+    if spec.kind == "fidelity":  # knob ladders against a reference, Pareto front, --tolerance
+        from ..studies.fidelity import run_fidelity
+
+        return run_fidelity(spec, out, force=args.force)
+    if spec.kind == "robustness":  # solution methods x hard cases: the failure map
+        from ..studies.robustness import run_robustness
+
+        return run_robustness(spec, out, force=args.force)
     results = run_study(spec, out, force=args.force)
     summary = {
         "study": spec.name, "kind": spec.kind, "out": str(out),

@@ -196,6 +196,7 @@ class Corrector:
             n_factor=0, t_factor=0.0, n_snes=0, t_snes=0.0, ksp_its=0, n_stalled=0, n_failed=0
         )
         self._hist: list[float] = []
+        self._own_ok = False
 
     # -- scaled problem --------------------------------------------------------
     def _res(self, xs: np.ndarray, ws: float) -> np.ndarray:
@@ -396,12 +397,14 @@ class Corrector:
             hist.append(rn)
             c_ok = kind != "arclength" or abs(F[-1]) <= 1e-9
             if rn <= tol * scale and c_ok:
+                corr._own_ok = True
                 return reasons.CONVERGED_FNORM_ABS
             # Newton stagnates on a kink of the piecewise-smooth residual (an element that
             # just touches its slip limit): accept below the looser tolerance, else give up
             if len(hist) > stall and hist[-1] > 0.5 * hist[-1 - stall] and rn <= 1e-4 * scale:
                 if rn <= tol_stall * scale and c_ok:
                     corr.stats["n_stalled"] += 1
+                    corr._own_ok = True
                     return reasons.CONVERGED_SNORM_RELATIVE
                 return reasons.DIVERGED_LOCAL_MIN
             if it >= max_it:
@@ -420,6 +423,7 @@ class Corrector:
     def _run(self, kind: str, y0: np.ndarray) -> tuple[np.ndarray, bool, int, int, str]:
         snes, X = self._get_snes(kind)
         X.getArray()[:] = y0
+        self._own_ok = False  # set by our convergence test only
         t0 = time.perf_counter()
         try:
             snes.solve(None, X)
@@ -434,7 +438,11 @@ class Corrector:
         self.stats["ksp_its"] += kits
         name = _reason_name(reason)
         y = X.getArray(readonly=True).copy()
-        ok = bool(reason > 0 and np.all(np.isfinite(y)))
+        # a positive reason that our test did not give (SNES stops with "converged" when a
+        # failed line search leaves a step below stol |x|, as cp does) is not a solution
+        ok = bool(reason > 0 and self._own_ok and np.all(np.isfinite(y)))
+        if reason > 0 and not self._own_ok:
+            name = f"{name} (declared by SNES with the residual not converged)"
         if not ok:
             self.stats["n_failed"] += 1
         return y, ok, its, kits, name

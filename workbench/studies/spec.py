@@ -21,6 +21,13 @@ from ..errors import InputError, check_choice, check_int, check_range, did_you_m
 
 DAMPERS = ("cone", "cylinder", "wedge")
 KINDS = ("comparison", "sweep", "fidelity", "robustness")
+# robustness study: the named solution methods and hard cases (defined in
+# workbench/studies/robustness.py; the names are here so the options can check them)
+ROBUSTNESS_METHODS = ("default", "fd-jacobian", "ls-basic", "ls-l2", "ls-cp",
+                      "tangent-predictor", "constant-predictor", "fixed-step",
+                      "frequency-stepping")
+ROBUSTNESS_CASES = ("near-separation", "high-kt-ratio", "high-force", "wedge-in-phase",
+                    "turning-point", "light-damping")
 
 
 @dataclass(frozen=True)
@@ -104,9 +111,42 @@ OPTIONS: tuple[Option, ...] = (
     Option("sweep", "str", None, "name of a scalar option to sweep (e.g. cf, cone-angle, mu)",
            "sweep", optional=True),
     Option("sweep-values", "floats", [], "values of the swept option", "sweep"),
-    Option("tolerance", "float", None, "accepted error, percent: pick the cheapest settings "
-           "meeting it (fidelity studies)", "fidelity", lo=0.0, lo_open=True, hi=100.0,
-           optional=True),
+    Option("tolerance", "percent", None, "accepted error, percent ('1' or '1%%'): pick the "
+           "cheapest settings meeting it (fidelity studies)", "fidelity", lo=0.0, lo_open=True,
+           hi=100.0, optional=True),
+    # ---- fidelity study options (kind = "fidelity"; workbench/studies/fidelity.py) ----
+    Option("knobs", "strs", ["mesh-size", "modes", "harmonics", "nt", "points-per-line",
+                             "rigid-damper"],
+           "knobs a fidelity study varies, one at a time about the base setting (the study's "
+           "own mesh-size, modes, ...)", "fidelity",
+           choices=("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper")),
+    Option("levels-mesh-size", "floats", [14.0, 11.0, 9.0, 7.0],
+           "fidelity: global mesh sizes to try, mm (finest = smallest)", "fidelity", lo=0.0,
+           lo_open=True),
+    Option("levels-modes", "ints", [4, 8, 12, 24, 40],
+           "fidelity: fixed-interface modes per body to try", "fidelity", lo=0, hi=400),
+    Option("levels-harmonics", "strs", ["1", "0-1", "0-3", "0-5", "0-7"],
+           "fidelity: harmonic sets to try, each 'a-b' (a range) or 'h+h+...' (a list)",
+           "fidelity"),
+    Option("levels-nt", "ints", [16, 32, 64, 128, 256, 512],
+           "fidelity: AFT time samples per period to try", "fidelity", lo=4, hi=8192),
+    Option("levels-points-per-line", "ints", [5, 11, 23, 33, 45],
+           "fidelity: contact points per line to try", "fidelity", lo=2, hi=400),
+    Option("levels-rigid-damper", "strs", ["rigid", "flexible"],
+           "fidelity: damper models to try (finest = flexible)", "fidelity",
+           choices=("rigid", "flexible")),
+    # ---- robustness study options (kind = "robustness"; workbench/studies/robustness.py) ----
+    Option("methods", "strs", list(ROBUSTNESS_METHODS), "solution methods of a robustness "
+           "study (named solver variants; the first is the reference): "
+           + ", ".join(ROBUSTNESS_METHODS), "robustness", choices=ROBUSTNESS_METHODS),
+    Option("hard-cases", "strs", list(ROBUSTNESS_CASES), "hard cases of a robustness study: "
+           + ", ".join(ROBUSTNESS_CASES), "robustness", choices=ROBUSTNESS_CASES),
+    Option("peak-tolerance", "float", 1.0, "robustness: a method that converges but whose "
+           "peak amplitude differs from the first method's by more than this, percent, is a "
+           "wrong answer", "robustness", lo=0.0,
+           lo_open=True, hi=100.0),
+    Option("time-check", "bool", True, "robustness: check the harmonic balance against time "
+           "integration at its suspect points (small models)", "robustness"),
 )
 
 BY_NAME = {o.name: o for o in OPTIONS}
@@ -162,6 +202,13 @@ def check_option(o: Option, value: Any) -> Any:
             return None
         raise InputError(o.name, value, f"a value ({o.help})")
     k = o.kind
+    if k == "percent":  # a float in percent; a trailing '%' is allowed ("1%", "0.5 %")
+        text = value.strip()[:-1] if isinstance(value, str) and value.strip().endswith("%") \
+            else value
+        try:
+            return check_range(o.name, text, o.lo, o.hi, lo_open=o.lo_open, unit="%")
+        except InputError as e:  # name the value as the user wrote it
+            raise InputError(o.name, value, e.allowed, e.why) from None
     if k == "float":
         return check_range(o.name, value, o.lo, o.hi, lo_open=o.lo_open)
     if k == "int":
@@ -251,6 +298,10 @@ def load_study(path: str | Path | None, cli_values: Mapping[str, Any] | None = N
         if isinstance(v, dict):
             raise InputError(key, f"[{key}] table", "top-level keys named like the "
                              "upd study options (no tables)")
+        o = BY_NAME.get(key)
+        if o is not None and o.kind == "path" and isinstance(v, str) and path is not None:
+            # a relative path in a study file is relative to that file, not to the caller
+            file_values[key] = str((Path(path).resolve().parent / v).resolve())
     return resolve(file_values, str(path) if path else "", cli_values)
 
 
@@ -270,7 +321,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _metavar(o: Option) -> str:
     return {"floats": "X,Y,...", "ints": "I,J,...", "strs": "A,B,...", "float": "X",
-            "int": "N", "path": "FILE", "str": "TEXT"}[o.kind]
+            "int": "N", "path": "FILE", "str": "TEXT", "percent": "X[%]"}[o.kind]
 
 
 def _fmt_default(v: Any) -> str:

@@ -1,0 +1,345 @@
+"""The fidelity study: Pareto front, tolerance pick, option parsing, a tiny end-to-end run."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import random
+
+import pytest
+
+from tests.conftest import ROOT, assert_nonblank, run_upd
+from workbench.errors import InputError
+from workbench.studies.fidelity import (
+    Setting,
+    pareto_front,
+    parse_harmonics,
+    pick_cheapest,
+    propose_combination,
+)
+from workbench.studies.spec import resolve
+
+# ---- Pareto front ---------------------------------------------------------------------------
+
+
+def test_pareto_front_known_points():
+    pts = [(1.0, 10.0), (2.0, 5.0), (3.0, 7.0), (4.0, 1.0), (4.0, 0.5), (5.0, None),
+           (0.5, 20.0), (6.0, 0.5), (7.0, float("nan")), (8.0, 0.1)]
+    # (3, 7) is beaten by (2, 5); (4, 1) by (4, 0.5); (6, 0.5) ties in error but is slower;
+    # None / NaN errors (failed settings) are never on the front
+    assert pareto_front(pts) == [6, 0, 1, 4, 9]
+
+
+def _dominated(i, pts):
+    ti, ei = pts[i]
+    return any((tj <= ti and ej <= ei) and (tj < ti or ej < ei)
+               for j, (tj, ej) in enumerate(pts) if j != i)
+
+
+def test_pareto_front_matches_brute_force():
+    rng = random.Random(8)
+    for _ in range(50):
+        pts = [(rng.choice([1, 2, 3, 4, 5, 6]) * 1.0, rng.choice([0.1, 0.5, 1.0, 2.0, 4.0]))
+               for _ in range(rng.randint(1, 12))]
+        front = pareto_front(pts)
+        expect = {i for i in range(len(pts)) if not _dominated(i, pts)}
+        # exact duplicates are not dominated by each other: the front keeps one of them
+        got = {pts[i] for i in front}
+        assert got == {pts[i] for i in expect}
+        assert len(front) == len(got)
+        assert [pts[i][0] for i in front] == sorted(pts[i][0] for i in front)
+
+
+# ---- tolerance pick -------------------------------------------------------------------------
+
+
+def _row(label, t, e):
+    return {"label": label, "time_s": t, "max_error_pct": e, "role": "knob"}
+
+
+def test_pick_cheapest_meeting_the_tolerance():
+    rows = [_row("coarse", 1.0, 5.0), _row("a", 3.0, 0.9), _row("b", 2.0, 0.99),
+            _row("fine", 10.0, 0.01), _row("failed", 0.5, None)]
+    p = pick_cheapest(rows, 1.0)
+    assert p["met"] and p["picked"]["label"] == "b"
+    assert "cheapest" in p["reason"] and "'b'" in p["reason"]
+    p = pick_cheapest(rows, 0.5)
+    assert p["picked"]["label"] == "fine"
+    p = pick_cheapest(rows, 5.0)  # the boundary counts as meeting it
+    assert p["picked"]["label"] == "coarse"
+
+
+def test_pick_when_nothing_meets_names_the_closest():
+    rows = [_row("coarse", 1.0, 5.0), _row("mid", 3.0, 2.0), _row("x", 4.0, None)]
+    p = pick_cheapest(rows, 1.0)
+    assert not p["met"] and p["picked"] is None
+    assert p["closest"]["label"] == "mid"
+    assert p["reason"].startswith("NO setting meets 1 %") and "'mid'" in p["reason"]
+    p = pick_cheapest([_row("x", 4.0, None)], 1.0)
+    assert p["closest"] is None and "failed" in p["reason"]
+
+
+def _ladder(knob, values, errors):
+    out = []
+    for v, e in zip(values, errors, strict=True):
+        st = Setting(str(v), {knob: v}, "knob")
+        st.errors = {} if e is None else {"c": {"peak_amplitude_mm": e,
+                                                "peak_frequency_hz": 0.0,
+                                                "friction_energy_mj": 0.0}}
+        out.append(st)
+    return out
+
+
+def test_propose_combination_takes_the_coarsest_level_meeting_alone():
+    ladders = {"modes": _ladder("modes", [4, 8, 12, 24], [3.0, 0.8, 0.2, 0.0]),
+               "nt": _ladder("nt", [16, 32, 64], [None, 0.5, 0.0])}
+    vals, why = propose_combination(ladders, 1.0)
+    assert vals == {"modes": 8, "nt": 32}
+    assert "0.8" in why["modes"]
+    vals, _ = propose_combination(ladders, 1.0, shift=1)  # the fallback: one level finer
+    assert vals == {"modes": 12, "nt": 64}
+    vals, _ = propose_combination(ladders, 1.0, shift=5)  # never beyond the finest
+    assert vals == {"modes": 24, "nt": 64}
+    # explicit per-level errors (e.g. against each knob's own finest level) take precedence
+    vals, why = propose_combination(ladders, 1.0, errors={"modes": [0.5, 0.1, 0.0, 0.0],
+                                                          "nt": [2.0, 0.9, 0.0]})
+    assert vals == {"modes": 4, "nt": 32} and "0.9" in why["nt"]
+    ladders["nt"] = _ladder("nt", [16, 32], [4.0, 2.0])
+    assert propose_combination(ladders, 1.0) is None
+
+
+# ---- options --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("text, value", [("1%", 1.0), (" 0.5 %", 0.5), ("2", 2.0), (3, 3.0)])
+def test_tolerance_accepts_percent(text, value):
+    assert resolve({"tolerance": text}, "f.toml").tolerance == value
+    assert resolve(cli_values={"tolerance": text}).tolerance == value
+
+
+@pytest.mark.parametrize("text", ["abc%", "%", "0%", "-1", "150%"])
+def test_tolerance_bad_values_name_the_parameter(text):
+    with pytest.raises(InputError) as e:
+        resolve(cli_values={"tolerance": text})
+    assert e.value.param == "tolerance" and e.value.value == text
+
+
+def test_parse_harmonics():
+    assert parse_harmonics("1") == [1]
+    assert parse_harmonics("0-3") == [0, 1, 2, 3]
+    assert parse_harmonics("1+3+5") == [1, 3, 5]
+    for bad in ("2-3", "0", "a", "1+1", "3-1"):
+        with pytest.raises(InputError):
+            parse_harmonics(bad)
+
+
+def test_cli_bad_tolerance_is_one_line_exit_2():
+    r = run_upd("study", "studies/fidelity.toml", "--tolerance", "1x%", "--out", "/nonexistent")
+    assert r.code == 2
+    lines = [x for x in r.err.strip().splitlines() if x.strip()]
+    assert len(lines) == 1 and "tolerance" in lines[0] and "1x%" in lines[0], r.err
+    r = run_upd("study", "studies/fidelity.toml", "--levels-harmonics", "2-3")
+    assert r.code == 2 and "levels-harmonics" in r.err and "Traceback" not in r.err
+
+
+def test_study_help_mentions_the_fidelity_options():
+    r = run_upd("study", "--help")
+    assert r.code == 0
+    for opt in ("--tolerance", "--knobs", "--levels-mesh-size", "--levels-modes",
+                "--levels-harmonics", "--levels-nt", "--levels-points-per-line",
+                "--levels-rigid-damper"):
+        assert opt in r.out, opt
+
+
+def test_the_study_file_resolves():
+    from workbench.studies.fidelity import plan_settings
+    from workbench.studies.spec import load_study
+
+    spec = load_study(ROOT / "studies" / "fidelity.toml", {"tolerance": "1%"})
+    assert spec.kind == "fidelity" and spec.tolerance == 1.0
+    settings, ladders = plan_settings(spec, "cone")
+    ref = next(s for s in settings if s.role == "reference")
+    assert ref.values == {"mesh-size": min(spec.levels_mesh_size),
+                          "modes": max(spec.levels_modes), "harmonics": list(range(8)),
+                          "nt": max(spec.levels_nt),
+                          "points-per-line": max(spec.levels_points_per_line),
+                          "rigid-damper": False}
+    assert len(spec.levels_mesh_size) >= 4
+    # every setting is distinct; one knob differs from the base in each ladder setting
+    assert len({s.key for s in settings}) == len(settings)
+    base = settings[0].values
+    for knob, lad in ladders.items():
+        for st in lad:
+            assert {k for k in base if st.values[k] != base[k]} <= {knob}
+
+
+# ---- a tiny end-to-end study ----------------------------------------------------------------
+
+TINY = """
+name = "tiny"
+kind = "fidelity"
+dampers = ["cone"]
+phases = [0.0]
+forces = [15.0]
+mesh-size = 14.0
+stability = false
+harmonics = [0, 1, 2, 3, 4, 5]
+nt = 64
+knobs = ["harmonics", "nt"]
+levels-harmonics = ["1", "0-3", "0-5"]
+levels-nt = [16, 32, 64, 128]
+"""
+TOL = "3%"
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    from workbench.studies.fidelity import run_fidelity
+    from workbench.studies.spec import load_study
+
+    d = tmp_path_factory.mktemp("fid")
+    (d / "tiny.toml").write_text(TINY)
+    spec = load_study(d / "tiny.toml", {"tolerance": TOL})
+    first = run_fidelity(spec, d / "out")
+    return d, first
+
+
+def _by_label(summary):
+    return {r["label"]: r for r in summary["settings"]}
+
+
+def test_tiny_reference_error_is_zero_and_errors_converge(tiny):
+    d, s = tiny
+    rows = _by_label(s)
+    # H 0-5 and nt 64 are the base; nt 128 (with H 0-5) is the reference
+    assert {"base", "H 1", "H 0-3", "nt 16", "nt 32", "reference"} <= set(rows)
+    assert s["failures"] == []
+    ref = rows["reference"]
+    for q in ("peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj"):
+        assert ref[f"err_{q}_pct"] == 0.0
+    # AFT samples: 16 -> 32 -> 64 -> 128 (the reference) converges; harmonics 1 -> 0-5 too
+    assert (rows["nt 16"]["max_error_pct"] > rows["nt 32"]["max_error_pct"]
+            > rows["base"]["max_error_pct"] > 0.0)
+    assert rows["H 1"]["max_error_pct"] > rows["base"]["max_error_pct"]
+    # every setting pays geometry and reduction, even those that found them cached
+    for r in rows.values():
+        assert r["geometry_s"] > 0 and r["reduction_s"] > 0 and r["hbm_s"] > 0
+        assert math.isclose(r["time_s"], r["geometry_s"] + r["reduction_s"] + r["assembly_s"]
+                            + r["hbm_s"], rel_tol=1e-6, abs_tol=2e-3)
+    # same model for every setting: the same recorded geometry and reduction times
+    assert len({(r["geometry_s"], r["reduction_s"]) for r in rows.values()}) == 1
+    # the Pareto front is non-dominated among the candidates (the reference is not one)
+    cand = [r for r in rows.values() if r["role"] != "reference"]
+    front = [r for r in cand if r["on_front"]]
+    assert sorted(r["label"] for r in front) == sorted(s["pareto_front"]) and front
+    for f, r in itertools.product(front, cand):
+        assert not (r["time_s"] < f["time_s"] and r["max_error_pct"] < f["max_error_pct"])
+
+
+def test_tiny_tolerance_pick_is_the_cheapest_meeting(tiny):
+    d, s = tiny
+    p = s["picked"]
+    tol = float(TOL.rstrip("%"))
+    rows = [r for r in s["settings"] if r["role"] != "reference"]
+    meeting = [r for r in rows if r["max_error_pct"] is not None and r["max_error_pct"] <= tol]
+    if meeting:
+        assert p["met"] and p["picked"]["time_s"] == min(r["time_s"] for r in meeting)
+        assert p["picked"]["max_error_pct"] <= tol
+        assert p["picked"]["label"] in s["pareto_front"]  # the cheapest meeting is on the front
+    else:
+        assert not p["met"] and "NO setting meets" in p["reason"]
+    # the first combination: per knob, the coarsest level within tol of the knob's finest
+    own = s["knob_self_errors_pct"]
+    assert own["nt"]["nt 128"] == 0.0 and own["harmonics"]["H 0-5"] == 0.0
+    want = {k: next(lv for lv, e in errs.items() if e is not None and e <= tol)
+            for k, errs in own.items()}
+    c = s["combinations"][0]
+    assert [lv.split(" (")[0] for lv in c["levels"].values()] == list(want.values())
+    match = [r for r in s["settings"] if r["role"] != "combined"
+             and all(r[k] == lv for k, lv in want.items())]
+    if match and match[0]["role"] == "reference":
+        assert c["label"] == "reference" and not c["meets"]
+    elif match:  # an already measured setting: not computed again
+        assert c["label"] == match[0]["label"] and "already measured" in c["note"]
+    else:  # a new setting: computed, its error against the reference measured
+        comb = next(r for r in s["settings"] if r["label"] == c["label"])
+        assert comb["role"] == "combined" and comb["max_error_pct"] is not None
+        assert c["meets"] == (comb["max_error_pct"] <= tol)
+        assert c["note"] == "computed to verify it"
+        assert comb["time_s"] > 0 and comb["hbm_s"] > 0
+
+
+def test_tiny_outputs_and_report(tiny):
+    d, s = tiny
+    out = d / "out"
+    man = json.loads((out / "manifest.json").read_text())
+    ids = [x["id"] for x in man["sections"]]
+    assert ids[:3] == ["setup", "knob-harmonics", "knob-nt"] and "pareto" in ids
+    assert "pick" in ids
+    pick_text = " ".join(next(x for x in man["sections"] if x["id"] == "pick")["text"])
+    assert s["picked"]["reason"] in pick_text
+    for f in ("fidelity_harmonics.png", "fidelity_nt.png", "fidelity_pareto.png"):
+        assert_nonblank(out / "figures" / f)
+    for t in ("fidelity_settings.csv", "fidelity_pareto.csv", "fidelity_cases.csv",
+              "fidelity_nt.csv"):
+        assert (out / "tables" / t).is_file()
+    assert (out / "report.html").stat().st_size > 10_000
+
+
+def test_tiny_second_run_reuses_everything(tiny):
+    d, first = tiny
+    r = run_upd("study", d / "tiny.toml", "--tolerance", TOL, "--out", d / "out", "--json",
+                "-q")
+    assert r.code == 0, r
+    s = r.json
+    assert s["n_computed"] == 0 and s["n_models_prepared"] == 0
+    assert s["n_reused"] == first["n_computed"]
+    a, b = _by_label(first), _by_label(s)
+    for k in a:  # same errors and the same charged times: nothing was measured again
+        assert a[k]["max_error_pct"] == b[k]["max_error_pct"]
+        assert a[k]["time_s"] == b[k]["time_s"]
+    assert s["picked"]["reason"] == first["picked"]["reason"]
+
+
+def test_tiny_failed_case_has_no_error_and_is_never_picked(tiny):
+    import dataclasses
+
+    from workbench.post.results import CaseResult
+    from workbench.studies.fidelity import relative_errors
+
+    d, _ = tiny
+    files = sorted((d / "out" / "cache" / "cases").glob("*.h5"))
+    good = CaseResult.load(files[0])
+    ref = Setting("reference", {}, "reference", results={"c": good})
+    bad = CaseResult.load(files[0])
+    bad.branch = dataclasses.replace(bad.branch, failed=True, message="diverged")
+    st = Setting("broken", {}, "knob", results={"c": bad})
+    st.errors = relative_errors(st, ref)
+    assert st.error() is None and st.failed == ["c: diverged"]
+    same = Setting("same", {}, "knob", results={"c": good})
+    same.errors = relative_errors(same, ref)
+    assert same.error() == 0.0
+    rows = [{"label": s.label, "time_s": t, "max_error_pct": s.error()}
+            for s, t in ((st, 1.0), (same, 2.0))]
+    assert pick_cheapest(rows, 1.0)["picked"]["label"] == "same"
+
+
+@pytest.mark.slow
+def test_real_fidelity_study(tmp_path):
+    """The shipped study (about 15-25 min on 2 busy cores): reference exact, a clear pick."""
+    r = run_upd("study", ROOT / "studies" / "fidelity.toml", "--tolerance", "1%", "--out",
+                tmp_path / "fid", "--json", "-q", timeout=5400)
+    assert r.code == 0, r
+    s = r.json
+    rows = _by_label(s)
+    assert rows["reference"]["max_error_pct"] == 0.0 and s["failures"] == []
+    assert len(s["knobs"]["mesh-size"]) >= 4 and s["pareto_front"]
+    p = s["picked"]
+    assert p["met"] == (p["picked"] is not None)
+    if p["met"]:
+        assert p["picked"]["max_error_pct"] <= 1.0 and p["picked"]["label"] in s["pareto_front"]
+    else:
+        assert "NO setting meets" in p["reason"]
+    for f in ("fidelity_pareto.png", "fidelity_mesh-size.png", "fidelity_nt.png"):
+        assert_nonblank(tmp_path / "fid" / "figures" / f)
