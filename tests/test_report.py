@@ -29,10 +29,12 @@ def _study_dir(root: Path) -> Path:
     (root / "tables").mkdir()
     fig, ax = plt.subplots(figsize=(6, 4))
     ax.plot([0, 1, 2], [0, 1, 4], color=(1.0, 0.0, 0.0), lw=6)
-    fig.savefig(root / "figures" / "first.png")
+    # explicit dpi: the workbench's figure style (render/common.py) changes the
+    # rcParams of the process, and other tests of this worker may have run first
+    fig.savefig(root / "figures" / "first.png", dpi=100)
     fig, ax = plt.subplots(figsize=(4, 3))
     ax.plot([0, 1], [1, 0], "b")
-    fig.savefig(root / "figures" / "second.png")
+    fig.savefig(root / "figures" / "second.png", dpi=100)
     plt.close("all")
     (root / "tables" / "peaks.csv").write_text("damper,peak (mm)\ncone,0.087\nwedge,0.35\n")
     (root / "tables" / "energy.md").write_text(

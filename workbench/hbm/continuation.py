@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import InputError, check_range
 from .balance import HarmonicBalance, observation
-from .branch import Branch
+from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
 from .fourier import Fourier
 from .options import SolverOptions
@@ -51,26 +51,7 @@ class _Recorder:
     """Collects the points of a branch; builds the Branch record at the end."""
 
     def __init__(self):
-        self.rows: dict[str, list] = {
-            k: []
-            for k in (
-                "freq_hz",
-                "stable",
-                "newton_its",
-                "energy_residual",
-                "out_amp",
-                "out_h1",
-                "out_harm",
-                "status",
-                "friction_energy",
-                "x",
-                "work_ext",
-                "work_visc",
-                "work_friction",
-                "work_normal",
-                "max_floquet_real",
-            )
-        }
+        self.rows: dict[str, list] = {k: [] for k in _ARRAYS}
 
     def add(self, **kw) -> None:
         for k, v in kw.items():

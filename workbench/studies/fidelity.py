@@ -52,6 +52,7 @@ from ..io import digest, write_json, write_text
 from ..log import bars_enabled, progress_bar
 from ..post.results import CaseResult
 from .plan import Case, make_case
+from .runner import case_done
 from .spec import StudySpec
 
 log = logging.getLogger(__name__)
@@ -283,16 +284,9 @@ class _Computer:
     def _done(self, c: Case) -> bool:
         if self.force and c.digest not in self._fresh:
             return False
-        p = self.case_dir / f"{c.digest}.h5"
-        t = self.time_dir / f"case-{c.digest}.json"
-        if not (p.is_file() and t.is_file()):
+        if not (self.time_dir / f"case-{c.digest}.json").is_file():
             return False
-        try:
-            CaseResult.load(p)
-            return True
-        except Exception:  # noqa: BLE001 - an unreadable cache file is recomputed
-            log.warning("cached case %s is unreadable; recomputing", p.name)
-            return False
+        return case_done(self.case_dir, c)
 
     def todo(self, settings: list[Setting]) -> list[Case]:
         seen: dict[str, Case] = {}

@@ -184,7 +184,9 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     # 1. models: every rank takes part (dolfinx is parallel); all are cached on disk
     prepared: dict[str, PreparedModel] = {}
     # rank 0 decides what is left to do, so every rank agrees on the split
-    todo_ids = [c.digest for c in cases if force or not _done(case_dir, c)] if rank == 0 else None
+    todo_ids = None
+    if rank == 0:
+        todo_ids = [c.digest for c in cases if force or not case_done(case_dir, c)]
     if comm is not None:
         todo_ids = comm.bcast(todo_ids, root=0)
     todo = [c for c in cases if c.digest in set(todo_ids)]
@@ -294,7 +296,8 @@ def model_pictures(prep: PreparedModel, out: Path, *, comm=None) -> None:
         write_json(stamp, {"key": key})
 
 
-def _done(case_dir: Path, c: Case) -> bool:
+def case_done(case_dir: Path, c: Case) -> bool:
+    """True when the case's cache file exists and loads (an unreadable one is recomputed)."""
     p = case_dir / f"{c.digest}.h5"
     if not p.is_file():
         return False
