@@ -222,8 +222,13 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
                          res.branch.n_points, res.timings["hbm"])
     timings["cases (wall)"] = time.perf_counter() - t_cases
     t_pic = time.perf_counter()
+    # one picture set per damper (a sweep prepares several models of one damper: the
+    # report shows the first, so the others need no stuck-mode solve)
+    pictured: set[str] = set()
     for prep in prepared.values():
-        model_pictures(prep, out, comm=comm)
+        if prep.geometry.damper not in pictured:
+            pictured.add(prep.geometry.damper)
+            model_pictures(prep, out, comm=comm)
     if prepared:
         timings["model pictures"] = time.perf_counter() - t_pic
     if comm is not None:
