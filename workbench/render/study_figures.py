@@ -589,9 +589,13 @@ def plot_sweep(cases: Sequence[CaseResult], option: str, path: str | Path, *,
         if _wants_log(amps, 30.0):
             axes[0, col].set_yscale("log")
             _readable_log(axes[0, col], "y")
-    fig.legend(loc="outside right upper", title="damper")
+    values = [sweep_value(c, option) for c in cases]
+    if _wants_log(values, 20.0):  # e.g. a load sweep over decades: log x spreads the low end
+        axes[1, 0].set_xscale("log")  # shared x: every panel follows
+        _readable_log(axes[1, 0], "x")
+    fig.legend(loc="outside right center", title="damper")
     name, _ = option_label(option)
-    fig.suptitle(title or f"Sweep of {name} ({option}): resonance of each damper")
+    fig.suptitle(title or f"Sweep of {name}: resonance peaks")
     return save_figure(fig, path)
 
 
