@@ -47,13 +47,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace, ctx: Context) -> dict:
-    from ..fe.parallel import abort_on_failure
-
-    with abort_on_failure():
-        return _run(args, ctx)
-
-
-def _run(args: argparse.Namespace, ctx: Context) -> dict:
     from ..assembly.params import load_contact_params
     from ..errors import check_choice, check_int
     from ..geometry import build_geometry

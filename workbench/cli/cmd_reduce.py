@@ -45,13 +45,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace, ctx: Context) -> dict:
-    from ..fe.parallel import abort_on_failure
-
-    with abort_on_failure():
-        return _run(args, ctx)
-
-
-def _run(args: argparse.Namespace, ctx: Context) -> dict:
     import numpy as np
     import scipy.linalg as sl
 

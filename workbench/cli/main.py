@@ -161,9 +161,12 @@ def main(argv: list[str] | None = None) -> int:
             "(rerun with --debug for the traceback)\n"
         )
         if wlog.mpi_size() > 1:
-            # raised on this rank only: the others would wait in a collective call for ever
+            # An InputError/SolveError is raised on every rank at once (the checks are
+            # collective); anything else (a PETSc error on one rank, a bug) may be raised on
+            # this rank only, and the others would wait in a collective call for ever.
             from mpi4py import MPI
 
+            sys.stderr.write(f"{prog}: rank {wlog.mpi_rank()} failed; aborting all ranks\n")
             sys.stderr.flush()
             MPI.COMM_WORLD.Abort(1)
         return 1

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import sys
-from contextlib import contextmanager
-
 import numpy as np
 
 
@@ -42,33 +39,6 @@ def allrows(comm, a: np.ndarray) -> np.ndarray:
     """Stack every rank's rows (rank order) on every rank."""
     parts = comm.allgather(np.asarray(a))
     return np.concatenate(parts, axis=0) if parts else np.asarray(a)
-
-
-@contextmanager
-def abort_on_failure(comm=None):
-    """Under MPI, turn an error raised on some ranks only into an abort of all ranks.
-
-    A WorkbenchError raised by the library is raised on every rank at once
-    (the checks are collective), so it passes through. Anything else (a
-    PETSc error on one rank, a bug) would leave the other ranks waiting in
-    a collective call for ever: report it in one line and abort the job.
-    """
-    from ..errors import WorkbenchError
-
-    try:
-        yield
-    except (WorkbenchError, KeyboardInterrupt):
-        raise
-    except Exception as e:
-        if comm is None:
-            from mpi4py import MPI
-
-            comm = MPI.COMM_WORLD
-        if comm.size == 1:
-            raise
-        sys.stderr.write(f"[{comm.rank}] error: {type(e).__name__}: {e} (aborting all ranks)\n")
-        sys.stderr.flush()
-        comm.Abort(1)
 
 
 def info(log, comm, msg: str, *args) -> None:
