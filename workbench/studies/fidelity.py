@@ -48,11 +48,12 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
-from ..io import digest, write_json, write_text
+from ..io import digest, write_json
 from ..log import bars_enabled, progress_bar
 from ..post.results import CaseResult
+from ..post.tables import write_rows_csv
 from .plan import Case, make_case
-from .runner import case_done
+from .runner import case_done, write_manifest_and_report
 from .spec import StudySpec
 
 log = logging.getLogger(__name__)
@@ -637,21 +638,9 @@ def _log_pick(pick: dict[str, Any], tol: float) -> None:
 # ---- outputs ------------------------------------------------------------------------------
 
 
-def _csv_cell(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    if isinstance(v, float):
-        return "nan" if math.isnan(v) else f"{v:.4g}"
-    s = str(v)
-    return f'"{s}"' if "," in s else s
-
-
 def write_csv(path: Path, rows: list[dict[str, Any]], cols: list[str] | None = None) -> Path:
-    cols = cols or (list(rows[0]) if rows else [])
-    lines = [",".join(cols)] + [",".join(_csv_cell(r.get(k)) for k in cols) for r in rows]
-    return write_text(path, "\n".join(lines) + "\n")
+    """The fidelity tables: four significant digits are plenty for errors and times."""
+    return write_rows_csv(path, rows, cols, digits=4)
 
 
 def condition_rows(settings: list[Setting]) -> list[dict[str, Any]]:
@@ -676,8 +665,6 @@ def write_fidelity_outputs(spec: StudySpec, out: Path, settings: list[Setting],
                            wall_s: float = 0.0) -> None:
     """Tables (CSV, JSON), charts, manifest.json and report.html."""
     from ..render.fidelity_figures import plot_knob, plot_pareto
-    from ..render.report import write_report
-    from ..versions import software_versions
 
     tables, figs = out / "tables", out / "figures"
     rows = summary["settings"]
@@ -762,18 +749,10 @@ def write_fidelity_outputs(spec: StudySpec, out: Path, settings: list[Setting],
             f"Pareto front (worst error): {', '.join(summary['pareto_front'])}"]
     if summary.get("picked"):
         head.append(summary["picked"]["reason"])
-    manifest = {
-        "title": f"Study '{spec.name}'", "subtitle": "fidelity study,",
-        "created": time.strftime("%Y-%m-%d %H:%M:%S"), "summary": head,
-        "inputs": spec.as_dict(), "sources": spec.source,
-        "versions": software_versions(),
-        "timings": {"wall time of this run (before the report)": wall_s,
-                    **{f"{s} (charged, summed over the settings)":
-                       sum(x.times.get(s, 0.0) for x in settings) for s in STAGES}},
-        "sections": sections,
-    }
-    write_json(out / "manifest.json", manifest)
-    write_report(out)
+    timings = {"wall time of this run (before the report)": wall_s,
+               **{f"{s} (charged, summed over the settings)":
+                  sum(x.times.get(s, 0.0) for x in settings) for s in STAGES}}
+    write_manifest_and_report(out, spec, "fidelity study,", head, timings, sections)
 
 
 def damper_line(summary: dict[str, Any]) -> str:

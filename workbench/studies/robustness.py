@@ -37,7 +37,6 @@ few hundred periods, minutes each, so it is not part of the check).
 from __future__ import annotations
 
 import logging
-import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -47,7 +46,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, SolveError
-from ..io import digest, write_json, write_text
+from ..io import digest, write_json
+from ..post.tables import write_rows_csv
+from .runner import write_manifest_and_report
 from .spec import ROBUSTNESS_CASES, ROBUSTNESS_METHODS, StudySpec
 
 log = logging.getLogger(__name__)
@@ -508,18 +509,8 @@ _CELL_COLS = ("case", "method", "status", "succeeded", "n_points", "newton_its",
               "max_status", "n_unknowns", "energy_residual_max", "message")
 
 
-def _csv_value(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, float):
-        return "nan" if math.isnan(v) else f"{v:.6g}"
-    s = str(v).replace('"', "'")
-    return f'"{s}"' if ("," in s or ";" in s) else s
-
-
 def _write_csv(path: Path, rows: list[dict[str, Any]], cols: tuple[str, ...]) -> Path:
-    lines = [",".join(cols)] + [",".join(_csv_value(r.get(k)) for k in cols) for r in rows]
-    return write_text(path, "\n".join(lines) + "\n")
+    return write_rows_csv(path, rows, cols, digits=6)
 
 
 def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> dict[str, Any]:
@@ -530,8 +521,6 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     output is written (the CLI exits with 3).
     """
     from ..log import mpi_size
-    from ..render.report import write_report
-    from ..versions import software_versions
 
     if mpi_size() > 1:
         raise InputError("kind", "robustness", "a robustness study on one process (no mpirun): "
@@ -601,13 +590,8 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     summary = _summary(spec, cells, checks)
     sections = _sections(spec, cells, checks, summary)
     timings["total"] = time.perf_counter() - t_start
-    manifest = {
-        "title": f"Study '{spec.name}'", "subtitle": "robustness study: solution methods x "
-        "hard cases,", "created": time.strftime("%Y-%m-%d %H:%M:%S"),
-        "summary": summary["headline"], "inputs": spec.as_dict(), "sources": spec.source,
-        "versions": software_versions(), "timings": timings, "sections": sections}
-    write_json(out / "manifest.json", manifest)
-    write_report(out)
+    write_manifest_and_report(out, spec, "robustness study: solution methods x hard cases,",
+                              summary["headline"], timings, sections)
     summary.update(out=str(out), report=str(out / "report.html"),
                    timings_s={k: round(v, 2) for k, v in timings.items()})
     write_json(out / "summary.json", summary)

@@ -24,14 +24,13 @@ not depend on the number of ranks.
 from __future__ import annotations
 
 import logging
-import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from ..errors import InputError, SolveError
-from ..io import digest, write_json, write_text
+from ..io import digest, write_json
 from ..log import bars_enabled, progress_bar
 from ..post.results import CaseResult, StudyResults
 from .plan import Case, plan
@@ -317,8 +316,7 @@ def case_done(case_dir: Path, c: Case) -> bool:
 def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
                   prepared: dict[str, PreparedModel]) -> None:
     """results.h5, CSV files, summary, figures, tables, manifest and report."""
-    from ..render.report import write_report
-    from ..versions import software_versions
+    from ..post.tables import write_rows_csv
 
     results.save(out / "results.h5")
     for c in results.cases:
@@ -326,16 +324,23 @@ def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
     rows = results.summaries()
     write_json(out / "summary.json", rows)
     if rows:
-        cols = list(rows[0])
-        lines = [",".join(cols)] + [",".join(_csv(r[k]) for k in cols) for r in rows]
-        write_text(out / "summary.csv", "\n".join(lines) + "\n")
-    sections = _sections(results, out)
+        write_rows_csv(out / "summary.csv", rows)
+    write_manifest_and_report(out, spec, f"{spec.kind} study,", headline(results),
+                              results.timings, _sections(results, out))
+
+
+def write_manifest_and_report(out: Path, spec: StudySpec, subtitle: str, summary: list[str],
+                              timings: dict[str, float], sections: list[dict]) -> None:
+    """``manifest.json`` (see render/report.py for its layout) and ``report.html``."""
+    from ..render.report import write_report
+    from ..versions import software_versions
+
     manifest = {
-        "title": f"Study '{spec.name}'", "subtitle": f"{spec.kind} study,",
+        "title": f"Study '{spec.name}'", "subtitle": subtitle,
         "created": time.strftime("%Y-%m-%d %H:%M:%S"),
-        "summary": headline(results),
+        "summary": summary,
         "inputs": spec.as_dict(), "sources": spec.source,
-        "versions": software_versions(), "timings": results.timings,
+        "versions": software_versions(), "timings": timings,
         "sections": sections,
     }
     write_json(out / "manifest.json", manifest)
@@ -373,15 +378,6 @@ def headline(results: StudyResults) -> list[str]:
                 f"{s['peak_amplitude_mm']:.4g} mm at {s['peak_frequency_hz']:.2f} Hz, "
                 f"friction energy {s['friction_energy_mj']:.3g} mJ per cycle")
     return lines
-
-
-def _csv(v: Any) -> str:
-    if v is None:
-        return ""
-    if isinstance(v, float):
-        return "nan" if math.isnan(v) else f"{v:.9g}"
-    s = str(v)
-    return f'"{s}"' if "," in s else s
 
 
 def check_failures(results: StudyResults) -> None:
