@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+from ..errors import InputError
 from .model import AssembledModel
 
 
@@ -29,6 +30,23 @@ class FamilyMode:
     freq_hz: float
     index: int  # mode number (ascending frequency, rigid modes included)
     receptance_m_per_n: float  # |phi_r phi_f| / omega^2 of that mode at the response point
+
+
+def family_frequency(M: np.ndarray, K: np.ndarray, f1: np.ndarray, r: np.ndarray) -> FamilyMode:
+    """The mode of ``(K, M)`` with the largest modal receptance from ``f1`` to ``r``.
+
+    Rigid modes (a damper free to slide) carry no resonance and are skipped.
+    """
+    lam, phi = sla.eigh(K, M)
+    lam = np.maximum(lam, 0.0)
+    scale = np.sqrt(max(lam.max(), 1e-300))
+    elastic = np.sqrt(lam) > 1e-6 * scale
+    if not elastic.any():
+        raise InputError("K", "no elastic mode", "a system with at least one elastic mode")
+    contrib = np.zeros(lam.size)
+    contrib[elastic] = np.abs((r @ phi[:, elastic]) * (f1 @ phi[:, elastic])) / lam[elastic]
+    i = int(np.argmax(contrib))
+    return FamilyMode(float(np.sqrt(lam[i]) / (2 * np.pi)), i, float(contrib[i]))
 
 
 def limit_stiffness(model: AssembledModel, limit: str) -> np.ndarray:
@@ -46,17 +64,8 @@ def limit_stiffness(model: AssembledModel, limit: str) -> np.ndarray:
 def family_mode(model: AssembledModel, phase_deg: float, limit: str,
                 response_blade: int = 1) -> FamilyMode:
     """The mode that dominates the response to the excitation at ``phase_deg``."""
-    K = limit_stiffness(model, limit)
-    lam, phi = sla.eigh(K, model.M)
-    lam = np.maximum(lam, 0.0)
-    f1 = model.excitation(phase_deg)
-    r = model.response_dofs[response_blade - 1]
-    scale = np.sqrt(np.abs(lam).max())
-    elastic = np.sqrt(lam) > 1e-6 * scale  # rigid (sliding) modes carry no resonance
-    contrib = np.zeros(lam.size)
-    contrib[elastic] = np.abs((r @ phi[:, elastic]) * (f1 @ phi[:, elastic])) / lam[elastic]
-    i = int(np.argmax(contrib))
-    return FamilyMode(float(np.sqrt(lam[i]) / (2 * np.pi)), i, float(contrib[i]))
+    return family_frequency(model.M, limit_stiffness(model, limit), model.excitation(phase_deg),
+                            model.response_dofs[response_blade - 1])
 
 
 def auto_band(model: AssembledModel, phase_deg: float, margin: float,

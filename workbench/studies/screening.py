@@ -1,0 +1,115 @@
+"""The coupling screen of a study's models: ``upd screen`` and the report's screen table.
+
+For every model of a study (damper x swept value) and every inter-blade
+phase, :func:`workbench.assembly.screen.screen` on the assembled stuck
+model, with the rig bound from the same rig and a rigid damper. The FE
+reductions are those of the study (same cache folder), so a screen before
+``upd study`` costs nothing afterwards, and a study computes its screen
+from models it has anyway.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+from typing import Any
+
+from ..assembly.screen import ScreenResult, linear_pair, screen
+from .plan import Case, plan
+from .spec import StudySpec
+
+log = logging.getLogger(__name__)
+
+
+def rigid_bound_model(prep, case: Case, out: Path, comm=None):
+    """The case's rig with a rigid 6-DOF damper (same contact layout and parameters)."""
+    from ..assembly.model import assemble
+    from ..fe.reduce import reduce_body
+
+    geom = prep.geometry
+    s = case.settings
+    rig = reduce_body(geom, "rig", n_modes=s["modes"], cache_dir=out / "cache" / "fe", comm=comm)
+    dmp = reduce_body(geom, "damper", n_modes=0, rigid=True, cache_dir=out / "cache" / "fe",
+                      comm=comm)
+    beta = float(geom.params["rig"]["platform"]["angle_deg"])
+    return assemble(rig, dmp, geom.contact, prep.contact_params, beta_deg=beta,
+                    excitation_direction=tuple(geom.excitation_direction),
+                    response_direction=tuple(geom.response_direction))
+
+
+def screen_prepared(prep, case: Case, phases, out: Path, *, comm=None,
+                    f_max_n: float | None = None) -> list[ScreenResult]:
+    """The screen of one prepared model (``runner.PreparedModel``) for each phase."""
+    s = case.settings
+    bound = rigid_bound_model(prep, case, out, comm)
+    blade = s["response-blade"]
+    return [screen(linear_pair(prep.assembled, ph, blade), s["damping"], phase_deg=ph,
+                   bound=linear_pair(bound, ph, blade), f_max_n=f_max_n) for ph in phases]
+
+
+def screen_row(case: Case, res: ScreenResult) -> dict[str, Any]:
+    """One flat, JSON-able row: the damper, the variant and the screen's numbers."""
+    return {"damper": case.damper, "variant": case.variant, **res.as_dict()}
+
+
+def run_screen(spec: StudySpec, out: str | Path, *, comm=None) -> dict[str, Any]:
+    """Screen every model of ``spec``: rows (one per model and phase) and timings."""
+    from ..log import progress_bar
+    from .runner import prepare_model
+
+    out = Path(out)
+    cases = plan(spec)
+    models: dict[str, Case] = {}
+    for c in cases:
+        models.setdefault(c.model_digest, c)
+    f_max = max(spec.forces)
+    rows: list[dict[str, Any]] = []
+    timings: dict[str, float] = {}
+    with progress_bar("screen: models", total=len(models), unit="model") as bar:
+        for c in models.values():
+            t0 = time.perf_counter()
+            bar.set_postfix_str(c.damper + (f" {c.variant}" if c.variant else ""))
+            prep = prepare_model(c, out, comm=comm)
+            for res in screen_prepared(prep, c, spec.phases, out, comm=comm, f_max_n=f_max):
+                row = screen_row(c, res)
+                row["seconds"] = time.perf_counter() - t0
+                rows.append(row)
+            key = c.damper + (f" {c.variant}" if c.variant else "")
+            timings[key] = time.perf_counter() - t0
+            bar.update(1)
+    return {"rows": rows, "timings": timings, "f_max_n": f_max}
+
+
+COLUMNS = (
+    ("damper", "damper", "{}"),
+    ("variant", "variant", "{}"),
+    ("family", "family", "{}"),
+    ("f_stuck_hz", "stuck (Hz)", "{:.1f}"),
+    ("f_slide_hz", "sliding (Hz)", "{:.1f}"),
+    ("k2_over_k", "k2/k", "{:.3f}"),
+    ("bound_k2_over_k", "rig bound k2/k", "{:.3f}"),
+    ("f_slip_n", "slip onset (N)", "{:.3g}"),
+    ("f_sep_n", "separation onset (N)", "{:.3g}"),
+    ("f_cap_n", "levels off up to (N)", "{:.3g}"),
+    ("stuck_peak_m_per_n", "stuck peak (mm/N)", "{:.3g}"),
+    ("growth", "A(Fmax)/A(0.32 Fmax)", "{:.2f}"),
+    ("verdict", "verdict", "{}"),
+)
+
+
+def format_cell(key: str, fmt: str, value: Any) -> str:
+    """A table cell: 'never' for an onset that does not exist, mm/N from m/N."""
+    if value is None:
+        return "never" if key in ("f_slip_n", "f_sep_n", "f_cap_n") else "-"
+    if key == "stuck_peak_m_per_n":
+        value = value * 1e3
+    return fmt.format(value)
+
+
+def table(rows: list[dict[str, Any]]) -> tuple[list[str], list[list[str]]]:
+    """Header and cells of the screen table (variant column only when some row has one)."""
+    cols = [c for c in COLUMNS if c[0] != "variant" or any(r.get("variant") for r in rows)]
+    head = [c[1] for c in cols]
+    body = [[format_cell(k, f, r.get(k)) for k, _, f in cols] for r in rows]
+    return head, body
