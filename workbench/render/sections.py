@@ -79,7 +79,7 @@ FIGURES, TABLES = "figures", "tables"
 OWN_PREFIXES = ("receptance_", "peak_amplitude_", "friction_energy_", "status_map_",
                 "status_shares_", "contact_", "sweep_")
 OWN_TABLE_PREFIXES = ("peak_amplitude_", "peak_frequency_", "friction_energy_",
-                      "status_shares_", "sweep_", "cases.")
+                      "status_shares_", "sweep_", "cases.", "screen.")
 MODES_PREFIX = "modes_"
 # also what workbench.render.modes.render_modes names its files, if written into figures/
 MODEL_PREFIX = "model_"
@@ -375,6 +375,34 @@ def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
                  lambda path: sf.plot_cone_angle_energy(cones, path, beta_deg=beta,
                                                         r1_mm=r1, length_mm=length,
                                                         option=option))
+    screen_rows = r.extras.get("screen") or []
+    if screen_rows and len(r.forces) >= 2:
+        from .screen_figures import design_rule_points, plot_design_rule
+
+        pts = design_rule_points(r.cases, screen_rows)
+        if pts:
+            b.figure(sec, f"sweep_{osl}_design_rule",
+                     f"The design rule across the {name} sweep: nonlinear peak growth "
+                     f"A({pts[0]['f_top_n']:g} N)/A({pts[0]['f_ref_n']:g} N) (filled) and "
+                     "the coupling screen's prediction (open) against k2/k (left); friction "
+                     "energy per cycle at the largest force against k2/k (middle); the "
+                     "nonlinear growth against the screen's saturation force over the "
+                     "largest force (right, log). A case whose curve stopped before its peak "
+                     "is left out (no marker)." + _failures(r.cases),
+                     lambda path: plot_design_rule(pts, path))
+            b.table(sec, f"sweep_{osl}_design_rule", Table(
+                ("damper", "family", option, "k2/k", "rig bound k2/k",
+                 "levels off up to (N)", "screen growth", "nonlinear growth",
+                 f"energy at {pts[0]['f_top_n']:g} N (mJ)"),
+                tuple((p["damper"], p["family"], p["variant"].split("=", 1)[-1],
+                       f"{p['k2_over_k']:.3f}",
+                       "-" if p["bound_k2_over_k"] is None else f"{p['bound_k2_over_k']:.3f}",
+                       "never" if p["f_cap_n"] is None else f"{p['f_cap_n']:.3g}",
+                       "-" if p["growth"] is None else f"{p['growth']:.2f}",
+                       "not reached" if p["growth_nl"] is None else f"{p['growth_nl']:.2f}",
+                       "not reached" if p["energy_mj"] is None else f"{p['energy_mj']:.3g}")
+                      for p in pts)),
+                f"The design rule across the {option} sweep: screen against harmonic balance")
     rec = b.section(f"sweep-{slug(option)}-receptances", f"Receptances across the {name} sweep")
     for p in families(r):
         for d in r.dampers:
@@ -386,6 +414,28 @@ def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
                          f"{d} damper, {family_name(p)}, F = {f:g} N: receptance (mm/N) for "
                          f"every value of {option}." + _failures(own),
                          lambda path, cs=own: sf.plot_sweep_receptances(cs, option, path))
+
+
+def _screen(b: _Builder, rows: list[dict[str, Any]]) -> None:
+    """The linear coupling screen of every model (workbench.assembly.screen)."""
+    from ..studies.screening import table as screen_table
+
+    head, body = screen_table(rows)
+    f_max = rows[0].get("f_max_n")
+    sec = b.section("screen", "Coupling screen (linear, seconds)", [
+        "How much each damper stiffens each family when it sticks, from the linear stuck "
+        "and sliding limits of the same reduced models: k2/k = 1 - (f_sliding/f_stuck)^2. "
+        "The rig bound is the same with a rigid damper and 1000x stiffer contact, the most "
+        "coupling this rig allows. Slip and separation onset are the excitation per blade "
+        "at which the first pair slips or lifts off in the stuck linear response. A "
+        "single-mode friction model gives the force up to which the peak stays level, "
+        "(4/pi) Q k2/k times the slip onset (Q = 1/(2 damping)), and the predicted growth "
+        f"of the peak from 0.32 Fmax to Fmax (Fmax = {f_max:g} N). A damper whose k2/k is "
+        "a few per cent cannot level a peak off, whatever mu and the centrifugal load. "
+        "These are estimates of the nonlinear curves below, not results: separation, "
+        "several slipping pairs and mode-shape changes are not in them."])
+    b.table(sec, "screen", Table(tuple(head), tuple(tuple(r) for r in body)),
+            "Coupling screen of every damper and family")
 
 
 # ---- figures found on disk, the cases table -------------------------------------------
@@ -479,6 +529,8 @@ def build_sections(results: StudyResults, study_dir: Path, *,
     modes, other = _found_files(b)
     if modes is not None:
         b.sections.append(modes)
+    if results.extras.get("screen"):
+        _screen(b, results.extras["screen"])
     option = results.inputs.get("sweep")
     if results.kind == "sweep" and option:
         _sweep(b, str(option), geometry_dirs)

@@ -233,6 +233,12 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     if comm is not None:
         failures = sum(comm.allgather(failures), [])
         comm.Barrier()
+    # the linear coupling screen of every model (cached beside the cases)
+    from .screening import study_screens
+
+    t_scr = time.perf_counter()
+    screen_rows = study_screens(cases, prepared, out, spec.phases, max(spec.forces), comm=comm)
+    timings["coupling screen"] = time.perf_counter() - t_scr
 
     # 3. gather, post-process and report on rank 0
     results = StudyResults(name=spec.name, kind=spec.kind,
@@ -244,6 +250,7 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         results.extras["bands"] = {
             md: {str(ph): list(b) for ph, b in p.bands.items()} for md, p in prepared.items()}
         results.extras["failures"] = failures
+        results.extras["screen"] = screen_rows
         results.extras["n_computed"] = len(todo)
         results.extras["n_reused"] = len(cases) - len(todo)
         write_outputs(results, spec, out, prepared)
@@ -323,6 +330,8 @@ def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
         c.branch.to_csv(out / "cases" / f"{c.case_id}.csv", unit_scale=1e3, unit="mm")
     rows = results.summaries()
     write_json(out / "summary.json", rows)
+    if results.extras.get("screen"):
+        write_rows_csv(out / "screen.csv", results.extras["screen"])
     if rows:
         write_rows_csv(out / "summary.csv", rows)
     write_manifest_and_report(out, spec, f"{spec.kind} study,", headline(results),

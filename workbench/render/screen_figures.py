@@ -1,0 +1,109 @@
+"""The design rule chart: the nonlinear answer against the linear coupling screen.
+
+For a sweep study (a rig or damper parameter swept), each swept model gives
+one point per damper and family: the nonlinear peak growth ``A(F_max) /
+A(F_ref)`` (``F_ref`` the study force nearest ``0.32 F_max``, 9.6 N for
+30 N) and the friction energy per cycle at ``F_max``, against the screen's
+``k2/k`` and its predicted saturation force. Where the single-mode rule
+holds, the filled markers (nonlinear) sit on the open ones (screen).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .common import pyplot, save_figure
+
+
+def design_rule_points(cases: Sequence[Any], screen_rows: Sequence[dict[str, Any]]
+                       ) -> list[dict[str, Any]]:
+    """One record per (damper, family, variant) with both the screen and the nonlinear numbers.
+
+    ``cases``: the study's CaseResults; ``screen_rows``: its screen rows
+    (``damper``, ``variant``, ``phase_deg``, ``k2_over_k``, ``f_cap_n``,
+    ``growth``, ...). Peaks that a curve did not reach (a case stopped early)
+    make the record's nonlinear numbers None, never a value.
+    """
+    forces = sorted({float(c.force_n) for c in cases})
+    if len(forces) < 2:
+        return []
+    f_max = forces[-1]
+    f_ref = min(forces[:-1], key=lambda f: abs(f - 0.32 * f_max))
+    out = []
+    for row in screen_rows:
+        sel = [c for c in cases if c.damper == row["damper"] and c.variant == row["variant"]
+               and abs(c.phase_deg - row["phase_deg"]) < 1e-9]
+        by_f = {float(c.force_n): c for c in sel}
+        rec = dict(row)
+        rec.update({"f_ref_n": f_ref, "f_top_n": f_max, "growth_nl": None, "energy_mj": None,
+                    "peak_top_mm": None})
+        top, ref = by_f.get(f_max), by_f.get(f_ref)
+        if top is not None and ref is not None and _reached(top) and _reached(ref):
+            a_top = top.summary()["peak_amplitude_mm"]
+            a_ref = ref.summary()["peak_amplitude_mm"]
+            if a_top and a_ref:
+                rec["growth_nl"] = a_top / a_ref
+                rec["peak_top_mm"] = a_top
+                rec["energy_mj"] = top.summary()["friction_energy_mj"]
+        out.append(rec)
+    return out
+
+
+def _reached(case: Any) -> bool:
+    """True when the case's curve went over its peak (completed, not stopped early)."""
+    b = case.branch
+    return bool(b.completed) and not bool(b.failed) and case.peak_index >= 0
+
+
+def plot_design_rule(points: Sequence[dict[str, Any]], path: str | Path, *,
+                     title: str = "") -> Path:
+    """Peak growth and friction energy against k2/k and the predicted saturation force."""
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(13.5, 4.2))
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for p in points:
+        groups.setdefault((p["damper"], p["family"]), []).append(p)
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    f_top = points[0]["f_top_n"] if points else 0.0
+    f_ref = points[0]["f_ref_n"] if points else 0.0
+    for k, ((damper, fam), pts) in enumerate(sorted(groups.items())):
+        col = colors[k % len(colors)]
+        lab = f"{damper}, {fam}"
+        x = np.array([p["k2_over_k"] for p in pts])
+        g_nl = np.array([np.nan if p["growth_nl"] is None else p["growth_nl"] for p in pts])
+        g_sc = np.array([np.nan if p["growth"] is None else p["growth"] for p in pts])
+        e = np.array([np.nan if p["energy_mj"] is None else p["energy_mj"] for p in pts])
+        cap = np.array([np.nan if p["f_cap_n"] is None else p["f_cap_n"] / f_top for p in pts])
+        o = np.argsort(x)
+        axes[0].plot(x[o], g_nl[o], "o-", color=col, label=f"{lab}: harmonic balance")
+        axes[0].plot(x[o], g_sc[o], "o--", mfc="none", color=col, label=f"{lab}: screen")
+        axes[1].plot(x[o], e[o], "o-", color=col, label=lab)
+        axes[2].plot(cap, g_nl, "o", color=col, label=lab)
+    ratio = f_top / f_ref if f_ref else np.nan
+    for ax in (axes[0], axes[2]):
+        ax.axhline(1.3, color="0.4", lw=0.8, ls=":")
+        ax.axhline(ratio, color="0.6", lw=0.8, ls="-.")
+        ax.text(ax.get_xlim()[0], 1.3, " levels off (<= 1.3)", va="bottom", fontsize=8,
+                color="0.3")
+        ax.text(ax.get_xlim()[0], ratio, f" linear ({ratio:.3g})", va="bottom", fontsize=8,
+                color="0.4")
+        ax.set_ylabel(f"peak growth A({f_top:g} N) / A({f_ref:g} N)")
+    axes[0].set_xlabel("k2/k from the coupling screen (-)")
+    axes[0].set_title("peak growth vs stuck coupling")
+    axes[1].set_xlabel("k2/k from the coupling screen (-)")
+    axes[1].set_ylabel(f"friction energy per cycle at {f_top:g} N (mJ)")
+    axes[1].set_title("dissipation vs stuck coupling")
+    axes[2].set_xscale("log")
+    axes[2].axvline(1.0, color="0.4", lw=0.8, ls=":")
+    axes[2].set_xlabel(f"predicted saturation force / {f_top:g} N (-, log)")
+    axes[2].set_title("peak growth vs predicted saturation")
+    axes[0].legend(fontsize=7, loc="best")
+    axes[1].legend(fontsize=7, loc="best")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return save_figure(fig, path)
