@@ -48,9 +48,16 @@ class ContactParams:
         raise ValueError(f"{kind=} is not 'line' or 'face'")
 
 
-def load_contact_params(path: str | Path | None = None, **overrides: float) -> ContactParams:
-    """Contact parameters from ``[contact]`` of a TOML file (default geometry/contact.toml)."""
-    source = path or (DEFAULT_FILE if DEFAULT_FILE.is_file() else None)
-    data = read_toml(source).get("contact", {}) if source else {}
+def load_contact_params(path: str | Path | None = None, *,
+                        geometry_file: str | Path | None = None,
+                        **overrides: float) -> ContactParams:
+    """Contact parameters, layered: geometry/contact.toml < the ``[contact]`` table of a
+    rig file (``geometry_file``: a rig calibrated with its own contact) < ``path`` (a
+    contact file) < ``overrides`` (None values ignored)."""
+    data: dict = dict(read_toml(DEFAULT_FILE).get("contact", {})) if DEFAULT_FILE.is_file() \
+        else {}
+    for source in (geometry_file, path):
+        if source is not None:
+            data.update(read_toml(source).get("contact", {}))
     data.update({k: v for k, v in overrides.items() if v is not None})
     return load_record(ContactParams, data, "contact.")

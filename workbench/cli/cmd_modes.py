@@ -55,7 +55,7 @@ def run(args: argparse.Namespace, ctx: Context) -> dict:
 
     contact = check_choice("contact", args.contact, ("stuck", "free"))
     n = check_int("n", args.n, 1, 200)
-    params = load_contact_params(args.contact_file)
+    params = load_contact_params(args.contact_file, geometry_file=args.geometry)
     out = ctx.out_dir(f"results/modes_{args.damper}")
     with stage(ctx.timings, "geometry"):
         geom = build_geometry(args.damper, out / "geometry", geometry_file=args.geometry,

@@ -55,7 +55,7 @@ def run(args: argparse.Namespace, ctx: Context) -> dict:
     from ..log import mpi_rank, stage
 
     n_modes = check_int("modes", args.modes, 0, 500)
-    params = load_contact_params(args.contact_file)
+    params = load_contact_params(args.contact_file, geometry_file=args.geometry)
     out = ctx.out_dir(f"results/reduced_{args.damper}")
     with stage(ctx.timings, "geometry"):
         geom = build_geometry(args.damper, out / "geometry", geometry_file=args.geometry,

@@ -232,7 +232,9 @@ def _merge(base: dict[str, Any], top: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _check_tables(data: Mapping[str, Any], source: str) -> None:
-    allowed = ("rig", *DAMPERS)
+    # [contact] of a rig file holds the contact parameters calibrated with that rig; it is
+    # read by workbench.assembly.params.load_contact_params, not by the geometry
+    allowed = ("rig", *DAMPERS, "contact")
     for key, value in data.items():
         if key not in allowed:
             raise InputError(
@@ -269,7 +271,7 @@ def load_geometry_params(
     if geometry_file is not None:
         raw = read_toml(geometry_file)
         _check_tables(raw, str(geometry_file))
-        data = _merge(data, raw)
+        data = _merge(data, {k: v for k, v in raw.items() if k != "contact"})
     if overrides:
         if not isinstance(overrides, Mapping):
             raise InputError("overrides", overrides, "a nested mapping like {'cone': {...}}")

@@ -68,6 +68,7 @@ def plot_design_rule(points: Sequence[dict[str, Any]], path: str | Path, *,
     for p in points:
         groups.setdefault((p["damper"], p["family"]), []).append(p)
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    seps: list[str] = []
     f_top = points[0]["f_top_n"] if points else 0.0
     f_ref = points[0]["f_ref_n"] if points else 0.0
     for k, ((damper, fam), pts) in enumerate(sorted(groups.items())):
@@ -83,18 +84,33 @@ def plot_design_rule(points: Sequence[dict[str, Any]], path: str | Path, *,
         axes[0].plot(x[o], g_sc[o], "o--", mfc="none", color=col, label=f"{lab}: screen")
         axes[1].plot(x[o], e[o], "o-", color=col, label=lab)
         axes[2].plot(cap, g_nl, "o", color=col, label=lab)
+        sep = np.array(["separates" in (p.get("verdict") or "") for p in pts])
+        if sep.any():  # the rule ignores lift-off: ring those points
+            for ax, xs, ys in ((axes[0], x, g_nl), (axes[2], cap, g_nl)):
+                ax.plot(xs[sep], ys[sep], "s", ms=11, mfc="none", color="0.35", zorder=0)
+            seps.append(lab)
     ratio = f_top / f_ref if f_ref else np.nan
     for ax in (axes[0], axes[2]):
         ax.axhline(1.3, color="0.4", lw=0.8, ls=":")
         ax.axhline(ratio, color="0.6", lw=0.8, ls="-.")
-        ax.text(ax.get_xlim()[0], 1.3, " levels off (<= 1.3)", va="bottom", fontsize=8,
-                color="0.3")
-        ax.text(ax.get_xlim()[0], ratio, f" linear ({ratio:.3g})", va="bottom", fontsize=8,
-                color="0.4")
+        tr = ax.get_yaxis_transform()  # x in axes fraction, y in data
+        ax.text(0.01, 1.3, "levels off (<= 1.3)", va="bottom", fontsize=8, color="0.3",
+                transform=tr)
+        ax.text(0.01, ratio, f"linear ({ratio:.3g})", va="bottom", fontsize=8, color="0.4",
+                transform=tr)
         ax.set_ylabel(f"peak growth A({f_top:g} N) / A({f_ref:g} N)")
-    axes[0].set_xlabel("k2/k from the coupling screen (-)")
+    k_all = np.array([p["k2_over_k"] for p in points if p["k2_over_k"] > 0])
+    log_k = k_all.size > 1 and k_all.max() / k_all.min() > 20
+    for ax in axes[:2]:
+        if log_k:
+            ax.set_xscale("log")
+    klab = "k2/k from the coupling screen (-" + (", log)" if log_k else ")")
+    if seps:
+        axes[0].plot([], [], "s", ms=11, mfc="none", color="0.35",
+                     label=f"a pair lifts off below {f_top:g} N (linear estimate)")
+    axes[0].set_xlabel(klab)
     axes[0].set_title("peak growth vs stuck coupling")
-    axes[1].set_xlabel("k2/k from the coupling screen (-)")
+    axes[1].set_xlabel(klab)
     axes[1].set_ylabel(f"friction energy per cycle at {f_top:g} N (mJ)")
     axes[1].set_title("dissipation vs stuck coupling")
     axes[2].set_xscale("log")

@@ -43,7 +43,11 @@ class Case:
         return f"{self.damper} {self.phase_deg:g} deg {self.force_n:g} N{v}"
 
     def model_params(self) -> dict[str, Any]:
-        return {"damper": self.damper, **{k: self.settings[k] for k in MODEL_KEYS}}
+        """The model part of the key: the options and the contents of the files they name
+        (a study file's geometry file and the default geometry/contact files), so editing a
+        file recomputes what depends on it."""
+        return {"damper": self.damper, **{k: self.settings[k] for k in MODEL_KEYS},
+                "files": input_files_digest(self.damper, self.settings.get("geometry"))}
 
     def solve_params(self) -> dict[str, Any]:
         return {"phase_deg": self.phase_deg, "force_n": self.force_n,
@@ -63,6 +67,31 @@ def solver_code_version() -> str:
     parts = [code_version(root / pkg) for pkg in ("contact", "hbm", "assembly")]
     parts.append(code_version(root / "studies", ("plan.py", "runner.py")))
     return digest(parts, 12)
+
+
+def input_files_digest(damper: str, geometry: Any) -> str:
+    """A digest of the parameter files a model of ``damper`` is built from."""
+    from ..assembly.params import DEFAULT_FILE as CONTACT_FILE
+    from ..geometry.params import default_files
+
+    paths = [*default_files(damper), CONTACT_FILE]
+    if geometry:
+        paths.append(Path(geometry))
+    return _files_digest(tuple(str(p) for p in paths))
+
+
+@functools.lru_cache(maxsize=64)
+def _files_digest(paths: tuple[str, ...]) -> str:
+    import hashlib
+
+    h = hashlib.sha256()
+    for p in paths:
+        h.update(p.encode())
+        try:
+            h.update(Path(p).read_bytes())
+        except OSError:
+            h.update(b"<missing>")
+    return h.hexdigest()[:16]
 
 
 def make_case(damper: str, phase: float, force: float, settings: dict[str, Any],

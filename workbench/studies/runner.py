@@ -79,7 +79,8 @@ def contact_params_for(case: Case):
 
     s = case.settings
     return load_contact_params(
-        mu=s.get("mu"), cf_n=s.get("cf"), kt_line_n_per_m2=s.get("kt-line"),
+        geometry_file=s.get("geometry"), mu=s.get("mu"), cf_n=s.get("cf"),
+        kt_line_n_per_m2=s.get("kt-line"),
         kn_line_n_per_m2=s.get("kn-line"), kt_face_n_per_m3=s.get("kt-face"),
         kn_face_n_per_m3=s.get("kn-face"))
 
