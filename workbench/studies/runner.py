@@ -7,6 +7,7 @@ Folder layout of a study (``out``)::
     out/cache/cases/<digest>.h5             one finished case (atomic; the resume unit)
     out/results.h5                          every case of this study, in plan order
     out/cases/<case>.csv                    each curve as CSV
+    out/cases/<case>_peak.vtu               contact pairs at the peak (ParaView; post/vtk_out.py)
     out/summary.csv, summary.json           one row per case
     out/figures/, out/tables/               pictures and tables
     out/manifest.json, out/report.html      the report
@@ -321,6 +322,9 @@ def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
     results.save(out / "results.h5")
     for c in results.cases:
         c.branch.to_csv(out / "cases" / f"{c.case_id}.csv", unit_scale=1e3, unit="mm")
+    from ..post.vtk_out import write_study_peaks
+
+    write_study_peaks(results, out, prepared, {c.digest: c.model_digest for c in plan(spec)})
     rows = results.summaries()
     write_json(out / "summary.json", rows)
     if rows:
