@@ -206,8 +206,7 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         log.info("%d of %d cases to compute (%d cached)%s", len(todo), len(cases),
                  len(cases) - len(todo), f", {len(mine)} on rank {rank}" if size > 1 else "")
     t_cases = time.perf_counter()
-    total = sum(_cost(c, prepared) for c in mine)
-    with progress_bar(f"{spec.name}: cases", total=round(total, 3), unit="cost") as bar:
+    with progress_bar(f"{spec.name}: cases", total=len(mine), unit="case") as bar:
         for k, c in enumerate(mine):
             bar.set_postfix_str(f"{k + 1}/{len(mine)} {c.name}")
             res = solve_case(prepared[c.model_digest], c)
@@ -216,7 +215,7 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
                 failures.append(f"{c.name}: {res.branch.message}")
                 log.warning("case %s stopped early: %s (its %d points are kept)", c.name,
                             res.branch.message, res.branch.n_points)
-            bar.update(_cost(c, prepared))
+            bar.update(1)
             if not bars_enabled():
                 log.info("case %d/%d done: %s (%d points, %.1f s)", k + 1, len(mine), c.name,
                          res.branch.n_points, res.timings["hbm"])
