@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import pyplot, save_figure
+from .common import pyplot, save_figure, styled
 
 STATUS_COLORS = ("#2b6cb0", "#d9822b", "#7cb342", "#9e9e9e")
 STATUS_LABELS = ("stuck", "stick-slip", "partial separation", "full separation")
@@ -31,6 +31,7 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(starts, stops, strict=True))
 
 
+@styled
 def plot_frf(
     branches: Sequence,
     path: str | Path,
@@ -81,6 +82,7 @@ def plot_frf(
     return save_figure(fig, path)
 
 
+@styled
 def plot_status_map(branch, path: str | Path, title: str = "") -> Path:
     """Contact status of every element (y) at every point (x: frequency) of a branch.
 

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .common import pyplot, save_figure
+from .common import pyplot, save_figure, styled
 from .study_figures import _EXTRA_COLORS, FIGSIZE, force_colors
 
 ERR_FLOOR = 1e-4  # percent
@@ -66,6 +66,7 @@ def _force_of(cond: str) -> float:
     return float(m.group(1)) if m else 0.0
 
 
+@styled
 def plot_knob(knob: str, levels: Sequence[str], times_s: Sequence[float],
               errors: dict[str, dict[str, Sequence[float | None]]], path: str | Path) -> Path:
     """Error vs time of one knob's levels: ``errors[quantity][condition][level]`` in percent."""
@@ -113,6 +114,7 @@ def pareto_indices(times: Sequence[float], errs: Sequence[float | None]) -> list
     return pareto_front(list(zip(times, errs, strict=True)))
 
 
+@styled
 def plot_pareto(points: Sequence[dict[str, Any]], path: str | Path, *,
                 tolerance_pct: float | None = None, picked: str | None = None,
                 reference_time_s: float | None = None) -> Path:

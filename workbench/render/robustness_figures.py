@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .common import pyplot, save_figure
+from .common import pyplot, save_figure, styled
 
 STATUS_STYLE = {"ok": ("#59a14f", "ok"), "wrong": ("#f28e2b", "wrong answer"),
                 "failed": ("#e15759", "failed")}
@@ -34,6 +34,7 @@ def _cell_text(c: dict[str, Any]) -> str:
     return t
 
 
+@styled
 def plot_failure_map(cells: Sequence[dict[str, Any]], methods: Sequence[str],
                      cases: Sequence[str], path: str | Path) -> Path:
     """Grid of methods (rows) x cases (columns): colour = status, text = iterations and time."""
@@ -78,6 +79,7 @@ def _draw(ax, f, a, stable, color, label, lw=1.2, ls="-"):
         ax.plot(f, au, color="0.55", lw=5.0, alpha=0.35, solid_capstyle="round", zorder=1)
 
 
+@styled
 def plot_branches(cells: Sequence[dict[str, Any]], cases: Sequence[str],
                   path: str | Path) -> Path:
     """One panel per hard case: every method's branch (mm against Hz); failures end with x."""
@@ -110,6 +112,7 @@ def plot_branches(cells: Sequence[dict[str, Any]], cases: Sequence[str],
     return save_figure(fig, path)
 
 
+@styled
 def plot_hbm_vs_time(checks: Sequence[dict[str, Any]], path: str | Path) -> Path:
     """One panel per small model: the HBM branch and the time-integration amplitudes."""
     plt = pyplot()

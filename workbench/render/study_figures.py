@@ -48,7 +48,7 @@ from ..post.tables import (
 from ..post.tables import (
     stability_runs as _runs,
 )
-from .common import pyplot, save_figure
+from .common import pyplot, save_figure, styled
 
 log = logging.getLogger(__name__)
 
@@ -194,6 +194,7 @@ def _dampers(cases: Sequence[CaseResult]) -> list[str]:
 # ---- receptances (paper Figs 9-10) ------------------------------------------------------
 
 
+@styled
 def plot_receptances(cases: Sequence[CaseResult], path: str | Path, *,
                      forces: Sequence[float] | None = None, title: str | None = None) -> Path:
     """Receptance vs frequency of one damper and one family, every force in one axes.
@@ -233,6 +234,7 @@ def plot_receptances(cases: Sequence[CaseResult], path: str | Path, *,
     return save_figure(fig, path)
 
 
+@styled
 def plot_receptance_overlay(cases: Sequence[CaseResult], path: str | Path, *,
                             title: str | None = None) -> Path:
     """Every damper's receptances of one family in one axes (the paper's Fig. 9 manner).
@@ -274,6 +276,7 @@ def plot_receptance_overlay(cases: Sequence[CaseResult], path: str | Path, *,
     return save_figure(fig, path)
 
 
+@styled
 def plot_sweep_receptances(cases: Sequence[CaseResult], option: str, path: str | Path, *,
                            title: str | None = None) -> Path:
     """Receptances of one damper, family and force, one curve per value of the swept option."""
@@ -322,6 +325,7 @@ def _proportional_guide(ax, forces: np.ndarray, values: np.ndarray) -> None:
             label="proportional to F (linear)")
 
 
+@styled
 def plot_peak_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
                        title: str | None = None) -> Path:
     """Largest response amplitude vs excitation force, one curve per damper (paper Fig. 11).
@@ -360,6 +364,7 @@ def plot_peak_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
     return save_figure(fig, path)
 
 
+@styled
 def plot_energy_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
                          title: str | None = None) -> Path:
     """Friction energy per cycle at resonance vs force, one curve per damper (log y).
@@ -438,6 +443,7 @@ def _status_panel(ax, case: CaseResult, side_labels: bool = True) -> None:
     ax.grid(False)
 
 
+@styled
 def plot_status_map(cases: Sequence[CaseResult], path: str | Path, *,
                     title: str | None = None) -> Path:
     """Contact status of every pair vs frequency for one damper and family (paper Fig. 12).
@@ -471,6 +477,7 @@ def plot_status_map(cases: Sequence[CaseResult], path: str | Path, *,
     return save_figure(fig, path)
 
 
+@styled
 def plot_status_shares(cases: Sequence[CaseResult], path: str | Path, *,
                        title: str | None = None) -> Path:
     """Share of the pairs in each status at resonance vs force (paper Fig. 13).
@@ -540,6 +547,7 @@ def _axis_label(option: str) -> str:
     return f"{name}, {option} ({unit})"
 
 
+@styled
 def plot_sweep(cases: Sequence[CaseResult], option: str, path: str | Path, *,
                title: str | None = None) -> Path:
     """Peak amplitude (top) and resonance frequency (bottom) vs the swept option.
@@ -599,6 +607,7 @@ def plot_sweep(cases: Sequence[CaseResult], option: str, path: str | Path, *,
     return save_figure(fig, path)
 
 
+@styled
 def plot_cone_angle_energy(cases: Sequence[CaseResult], path: str | Path, *, beta_deg: float,
                            r1_mm: float, length_mm: float, option: str = "cone-angle",
                            title: str | None = None) -> Path:
