@@ -335,6 +335,7 @@ def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
 def write_manifest_and_report(out: Path, spec: StudySpec, subtitle: str, summary: list[str],
                               timings: dict[str, float], sections: list[dict]) -> None:
     """``manifest.json`` (see render/report.py for its layout) and ``report.html``."""
+    from ..post.inputs import used_inputs
     from ..render.report import write_report
     from ..versions import software_versions
 
@@ -343,6 +344,7 @@ def write_manifest_and_report(out: Path, spec: StudySpec, subtitle: str, summary
         "created": time.strftime("%Y-%m-%d %H:%M:%S"),
         "summary": summary,
         "inputs": spec.as_dict(), "sources": spec.source,
+        "inputs_used": used_inputs(spec.as_dict(), spec.source),
         "versions": software_versions(), "timings": timings,
         "sections": sections,
     }
@@ -374,10 +376,12 @@ def headline(results: StudyResults) -> list[str]:
             ok = [c for c in cs if c.peak_index >= 0]
             if not ok:
                 continue
-            top = max(ok, key=lambda c: c.force_n)
+            top = max(ok, key=lambda c: (c.force_n, -c.summary()["peak_amplitude_mm"]))
             s = top.summary()
+            # a sweep has several cases per damper and force: name the one quoted
+            which = f" ({top.variant.replace('=', ' = ')})" if top.variant else ""
             lines.append(
-                f"{d}, {top.family}: at {top.force_n:g} N the peak is "
+                f"{d}, {top.family}{which}: at {top.force_n:g} N the peak is "
                 f"{s['peak_amplitude_mm']:.4g} mm at {s['peak_frequency_hz']:.2f} Hz, "
                 f"friction energy {s['friction_energy_mj']:.3g} mJ per cycle")
     return lines
