@@ -112,3 +112,24 @@ def _is_pyplot_figure(fig) -> bool:
 
     plt = sys.modules.get("matplotlib.pyplot")
     return plt is not None and fig in [plt.figure(n) for n in plt.get_fignums()]
+
+
+def readable_log(ax, which: str = "both") -> None:
+    """Plain-number tick labels (0.1, 0.2, 0.5, 1, 2, ...) on log axes spanning <= 3 decades.
+
+    Wider axes keep matplotlib's powers of ten.
+    """
+    from matplotlib import ticker
+
+    names = ("x", "y") if which == "both" else (which,)
+    for name in names:
+        axis = getattr(ax, f"{name}axis")
+        if axis.get_scale() != "log":
+            continue
+        lo, hi = sorted(ax.get_xlim() if name == "x" else ax.get_ylim())
+        if lo <= 0 or hi / lo > 1e3:
+            continue
+        fmt = ticker.FuncFormatter(lambda v, _: f"{v:g}")
+        axis.set_major_formatter(fmt)
+        axis.set_minor_locator(ticker.LogLocator(subs=(2.0, 5.0)))
+        axis.set_minor_formatter(fmt)

@@ -238,8 +238,10 @@ def _peaks_and_energy(b: _Builder, variant: str) -> None:
                    ["Energy dissipated by friction per cycle at the resonance peak of each "
                     "branch, summed over every contact pair, mJ; one table per family with "
                     "the dampers in rows and the forces in columns, as in the paper's "
-                    "Tables 1-2. Values many decades below the others (of order 1e-18 mJ) are "
-                    "round-off: those contacts do not slip."])
+                    "Tables 1-2. An energy at or below 1e-6 times the largest of its table "
+                    "or figure is round-off of contacts that do not slip: it reads "
+                    "'stuck / 0' in the tables and sits in the 'stuck / 0' strip under "
+                    "the figure's log axis."])
     for p in families(r):
         fam = family_name(p)
         cases = r.select(phase_deg=p, variant=variant)
