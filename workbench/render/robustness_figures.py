@@ -114,32 +114,37 @@ def plot_branches(cells: Sequence[dict[str, Any]], cases: Sequence[str],
 
 @styled
 def plot_hbm_vs_time(checks: Sequence[dict[str, Any]], path: str | Path) -> Path:
-    """One panel per small model: the HBM branch and the time-integration amplitudes."""
+    """One panel per small model: the HBM branch and the time-integration amplitudes.
+
+    The models' DOFs are in metres; amplitudes are drawn in mm, as in every
+    other figure of the workbench.
+    """
     plt = pyplot()
     n = len(checks)
     fig, axes = plt.subplots(1, n, figsize=(max(4.6 * n, 7.0), 3.8), squeeze=False)
     for ax, ch in zip(axes[0], checks, strict=True):
         f = np.asarray(ch["freq_hz"])
-        a = np.asarray(ch["amp"])
+        a = 1e3 * np.asarray(ch["amp"])  # m -> mm
         st = np.asarray(ch["stable"], bool)
         ax.plot(f, np.where(st, a, np.nan), color="#1f6fb4", lw=1.4, label="HBM (stable)")
         ax.plot(f, np.where(~st, a, np.nan), color="#1f6fb4", lw=1.2, ls="--",
                 label="HBM (Hill-unstable)")
         for r in ch["points"]:
             filled = r["ti_converged"]
-            ax.plot(r["freq_hz"], r["ti_amplitude"], "o", ms=7, mew=1.5, color="#e15759",
+            ax.plot(r["freq_hz"], 1e3 * r["ti_amplitude"], "o", ms=7, mew=1.5, color="#e15759",
                     mfc="#e15759" if filled else "none")
             label = f"{r['diff_pct']:+.2g}%"
             near = r.get("diff_nearest_pct")
             if near is not None and abs(near - r["diff_pct"]) > 1e-9:
                 label += f" (nearest {near:+.2g}%)"
-            ax.annotate(label, (r["freq_hz"], r["ti_amplitude"]), textcoords="offset points",
+            ax.annotate(label, (r["freq_hz"], 1e3 * r["ti_amplitude"]),
+                        textcoords="offset points",
                         xytext=(5, 4), fontsize=7)
         ax.plot([], [], "o", color="#e15759", label="time integration (periodic)")
         ax.plot([], [], "o", color="#e15759", mfc="none", label="time integration (not periodic)")
         ax.set_title(f"{ch['model']} ({ch['n_dofs']} DOFs)", fontsize=9)
-        ax.set_xlabel("frequency, Hz")
-        ax.set_ylabel("peak |y|, m")
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel("peak |y| (mm)")
         ax.margins(y=0.12)
     h, lab = axes[0][0].get_legend_handles_labels()
     fig.legend(h, lab, loc="lower center", ncol=4, frameon=False, fontsize=8)
