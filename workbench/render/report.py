@@ -156,6 +156,16 @@ def render_html(manifest: dict[str, Any], root: Path) -> str:
             )
             n_fig += 1
     parts.append("<h2 id='inputs'>Inputs</h2>")
+    if not manifest.get("inputs_used") and manifest.get("inputs", {}).get("kind"):
+        # a manifest written before inputs_used existed: resolve it now (from the
+        # geometry and contact files as they are today)
+        from ..post.inputs import used_inputs
+
+        try:
+            manifest = dict(manifest, inputs_used=used_inputs(manifest["inputs"],
+                                                              manifest.get("sources", {})))
+        except Exception as e:  # noqa: BLE001 - the raw table below is still right
+            log.warning("inputs of an older manifest not resolved: %s", e)
     if manifest.get("inputs_used"):
         parts.append("<p class='sub'>The values every case was computed with (options left "
                      "unset take the geometry and contact files' values, named in the last "
