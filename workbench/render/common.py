@@ -108,10 +108,7 @@ def save_figure(fig, path: str | Path | None) -> Any:
 
 def _is_pyplot_figure(fig) -> bool:
     """True for a figure that pyplot manages (made by a caller with plt); ours are not."""
-    import sys
-
-    plt = sys.modules.get("matplotlib.pyplot")
-    return plt is not None and fig in [plt.figure(n) for n in plt.get_fignums()]
+    return getattr(fig.canvas, "manager", None) is not None
 
 
 def readable_log(ax, which: str = "both") -> None:
