@@ -36,6 +36,19 @@ def test_modes_cylinder_coarse(tmp_path):
         "first bending out-of-phase"
     for key in ("modes_rig_xdmf", "modes_damper_xdmf"):
         assert (tmp_path / os.path.basename(s["files"][key])).is_file()
+    # ParaView/meshio/pyvista files: mode numbers from 1, each VTU with its frequency
+    import meshio
+    import pyvista as pv
+
+    reader = pv.get_reader(s["files"]["modes_rig_pvd"])
+    assert list(reader.time_values) == [1.0, 2.0, 3.0, 4.0]
+    for k, f in enumerate(s["freqs_hz"]):
+        m = meshio.read(tmp_path / "modes_rig" / f"mode_{k + 1:02d}.vtu")
+        assert round(float(m.field_data["freq_hz"][0]), 3) == f
+        assert m.point_data["mode_shape"].shape == (len(m.points), 3)
+    mesh = meshio.read(tmp_path / "geometry" / "rig.vtu")
+    assert [c.type for c in mesh.cells] == ["tetra10"]
+    assert pv.read(tmp_path / "geometry" / "damper.vtu").volume > 0
     assert_nonblank(tmp_path / "first_bending.png")
     assert json.loads((tmp_path / "modes.json").read_text())["freqs_hz"] == s["freqs_hz"]
 

@@ -85,6 +85,10 @@ def test_energy_picture_changes_with_the_energies(cone, tmp_path):
     changed = np.any(np.abs(ia - ib) > 0.1, axis=-1)
     assert changed.mean() > 2e-3, changed.mean()
     # only the upper half of the damper changed (platform 2's line, x > 0, is drawn on top)
+    # platform 2's pairs are now "stuck / 0": grey, not the bottom of the colour map
+    from workbench.render.contact_maps import STUCK_COLOR
+
+    assert _pixels_of(b, STUCK_COLOR) > 1.3 * _pixels_of(a, STUCK_COLOR) + 500
     rows = np.flatnonzero(changed.any(axis=1))
     top = int(SCENE_ROWS * ia.shape[0])
     scene = changed[:top]
@@ -118,3 +122,13 @@ def test_sections_paint_the_dampers_given(cone, tmp_path):
     assert all("F = 30 N" in f["caption"] for f in maps["figures"])
     for p in paths:
         assert_nonblank(tmp_path / p)
+
+
+def test_energy_scale_is_shared_and_ignores_round_off():
+    from workbench.render.contact_maps import energy_scale
+
+    # round-off (1e-18, negative) is below the floor; the rest spans 1e-3..2: log
+    lo, hi, log = energy_scale([np.array([1e-18, -1e-20, 2.0]), np.array([1e-3, 0.5])])
+    assert (lo, hi, log) == (1e-3, 2.0, True)
+    assert energy_scale([np.array([0.5, 1.0])]) == (0.0, 1.0, False)
+    assert energy_scale([np.zeros(3)]) == (0.0, 1.0, False)

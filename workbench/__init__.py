@@ -18,3 +18,27 @@ Nothing below ``fe`` imports dolfinx or gmsh.
 """
 
 __version__ = "0.1.0"
+
+__all__ = ["__version__", "Model", "model", "frf", "receptance_figure", "status_figure",
+           "energy_figure", "peak_figure", "study", "load_results", "frf_model", "frf_curves",
+           "frf_figure", "read_matrices"]
+
+# The Python API (workbench/api.py, docs/API.md), loaded on first use so that
+# ``import workbench`` stays light and touches neither dolfinx nor matplotlib.
+_API = (
+    "Model", "model", "frf", "receptance_figure", "status_figure", "energy_figure",
+    "peak_figure", "study", "load_results", "frf_model", "frf_curves", "frf_figure",
+    "read_matrices",
+)
+
+
+def __getattr__(name: str):
+    if name in _API:
+        from . import api
+
+        return getattr(api, name)
+    raise AttributeError(f"module 'workbench' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_API])

@@ -96,6 +96,9 @@ class ReducedModel:
             h.attrs["code_version"] = self.code_version
             h.attrs["n_full_dofs"] = self.n_full_dofs
             h.attrs["timings"] = json.dumps(self.timings)
+            from .post.units import REDUCED_UNITS, annotate
+
+            annotate(h, REDUCED_UNITS)
         return path
 
     @classmethod

@@ -117,6 +117,7 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         unit_scale=1e3 if mm else 1.0,
         unit="mm" if mm else model.length_unit,
         title=f"{model.name}",
+        force_per_level_n=float(abs(model.f1).max()),
     )
     summary = {
         "model": str(model.path),

@@ -20,8 +20,10 @@ blades alone; the damper's own free-free frequencies are listed beside).
 
 The first bending in-phase and out-of-phase modes are named from the
 computed shapes (x-displacement of the two response points). Shapes go to
-modes_rig.xdmf / modes_damper.xdmf (ParaView; "time" = mode index) and to
-mode_NN.png and first_bending.png.
+modes_rig.pvd / modes_damper.pvd (one VTU per mode with its frequency; read
+by ParaView, meshio and pyvista), to modes_rig.xdmf / modes_damper.xdmf
+(dolfinx layout) and to mode_NN.png and first_bending.png. Everywhere
+modes are numbered from 1 ("time" = mode number in ParaView).
 
 Examples:
   upd modes --damper cone --out results/modes_cone --json

@@ -205,7 +205,11 @@ def _gather_shapes(V, arrays: list[np.ndarray], comm) -> BodyShapes | None:
 
 
 def _write_xdmf(path: Path, V, arrays: list[np.ndarray], comm) -> Path:
-    """Mode shapes as one XDMF time series ("time" = mode index), readable by ParaView."""
+    """Mode shapes as one XDMF time series ("time" = mode number from 1, as the pictures).
+
+    dolfinx's layout, read by ParaView; meshio and pyvista read the VTU/PVD
+    files written beside (:func:`workbench.post.vtk_out.write_modes`).
+    """
     from dolfinx.io import XDMFFile
 
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -214,8 +218,26 @@ def _write_xdmf(path: Path, V, arrays: list[np.ndarray], comm) -> Path:
         for k, a in enumerate(arrays):
             u = _vec_to_function(V, a)
             u.name = "mode_shape"
-            f.write_function(u, float(k))
+            f.write_function(u, float(k + 1))
     return path
+
+
+def _write_vtk(out: Path, body_shapes, freqs, labels, contact, dmp, damper_elastic,
+               damper_hz, comm) -> dict[str, str]:
+    """modes_rig.pvd and modes_damper.pvd (VTU per mode, 1-based, with frequencies)."""
+    from ..post.vtk_out import write_modes
+
+    if contact != "stuck":  # the damper file holds its own free-free elastic modes
+        bs = _gather_shapes(dmp.V, damper_elastic, comm)
+        if bs is not None:
+            body_shapes = dict(body_shapes, damper=bs)
+    if comm.rank != 0:
+        return {}
+    files = {"modes_rig_pvd": str(write_modes(out, "rig", body_shapes["rig"], freqs, labels))}
+    dl = labels if contact == "stuck" else ["damper free-free"] * len(damper_hz)
+    files["modes_damper_pvd"] = str(write_modes(
+        out, "damper", body_shapes["damper"], freqs if contact == "stuck" else damper_hz, dl))
+    return files
 
 
 def compute_modes(
@@ -316,11 +338,17 @@ def compute_modes(
                 out / "modes_damper.xdmf", dmp.V,
                 dmp_arrays if contact == "stuck" else damper_elastic, comm))
         body_shapes = {}
-        if shapes:
+        if shapes or out_dir is not None:
             for name, body, arrays in (("rig", rig, rig_arrays), ("damper", dmp, dmp_arrays)):
                 bs = _gather_shapes(body.V, arrays, comm)
                 if bs is not None:
                     body_shapes[name] = bs
+        if out_dir is not None:
+            files.update(_write_vtk(Path(out_dir), body_shapes, freqs, labels, contact, dmp,
+                                    None if contact == "stuck" else damper_elastic,
+                                    damper_hz, comm))
+        if not shapes:
+            body_shapes = {}
     res = ModesResult(
         damper=geom.damper, contact=contact, freqs_hz=freqs, labels=labels,
         in_phase=i_in, out_of_phase=i_out, response_disp=resp, damper_share=share_arr,

@@ -133,6 +133,7 @@ def _build_or_reuse(lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
     old = _reusable(h5, dig)
     if old is not None:
         log.info("geometry: reusing %s (digest %s)", h5, dig)
+        _write_vtu(out_dir)  # a folder built before the VTU files existed gets them
         return old
     out_dir.mkdir(parents=True, exist_ok=True)
     if h5.exists():
@@ -182,6 +183,7 @@ def _build(lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
     t1 = time.perf_counter()
     write_xdmf(rig_msh, out_dir / "rig.xdmf", "rig")
     write_xdmf(damper_msh, out_dir / "damper.xdmf", "damper")
+    _write_vtu(out_dir)
     timings["xdmf_s"] = time.perf_counter() - t1
 
     rho = gp.rig.material.rho_kg_m3
@@ -221,6 +223,16 @@ def _build(lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
     log.info("geometry: %d + %d nodes, %d contact pairs, max pair gap %.3g m, written to %s",
              rig_info.n_nodes, damper_info.n_nodes, lay.n_pairs, stats["max_pair_gap_m"], out_dir)
     return rec
+
+
+def _write_vtu(out_dir: Path) -> None:
+    """rig.vtu and damper.vtu beside the XDMF files (meshio, pyvista and ParaView read them)."""
+    from ..post.vtk_out import write_mesh_vtu
+
+    for body in ("rig", "damper"):
+        vtu, msh = out_dir / f"{body}.vtu", out_dir / f"{body}.msh"
+        if not vtu.is_file() or vtu.stat().st_mtime_ns < msh.stat().st_mtime_ns:
+            write_mesh_vtu(msh, vtu)
 
 
 def _match_stats(pts: np.ndarray, lay: Layout, rig_info: Any, damper_info: Any) -> dict[str, Any]:

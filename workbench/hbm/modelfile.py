@@ -3,14 +3,16 @@
 A model file (every key is checked; unknown keys are refused with a hint)::
 
     [model]
-    matrices = "model.npz"      # .npz or .h5/.hdf5, relative to this file
-    mass = "M"                  # array (dataset) names in that file
+    matrices = "model.npz"      # relative to this file: .npz, .h5, or an FE code's
+                                # export (.op4, .pch, .mtx, .mm, .rua/.rsa): see below
+    mass = "M"                  # array (dataset, matrix) names in that file
     stiffness = "K"
     damping = ""                # a viscous matrix C (N s/m); empty: damping_ratio
     damping_ratio = 0.005       # modal damping on the modes with stuck contacts
     static_force = ""           # an optional constant force vector (N)
     balance = true              # add the force that carries the contact preloads
     length_unit = "m"           # unit of the DOFs (peak_amplitude is in this unit)
+    dof_map = ""                # node/component of each row, for formats without labels
 
     [excitation]                # f(t) = level * amplitude * cos(w t + phase)
     dofs = [0]
@@ -44,6 +46,23 @@ A model file (every key is checked; unknown keys are refused with a hint)::
 Matrices in a ``.npz`` are arrays; a sparse matrix ``K`` may be stored as
 ``K_data``, ``K_indices``, ``K_indptr``, ``K_shape`` (CSR). In HDF5 they
 are datasets (or groups with those four members).
+
+Matrices from an FE code (``workbench.readers``): ``matrices`` may be a
+Nastran OP4 or DMIG punch file (``mass = "MAAX"`` names a matrix in it).
+With ``matrices = ""`` each of ``mass``, ``stiffness``, ``damping`` is a
+file of its own, optionally ``"file#NAME"`` (Abaqus ``job_MASS2.mtx``,
+Matrix Market, Harwell-Boeing). DMIG and Abaqus files label every row with
+a (node id, component 1-6); for the others ``dof_map`` gives the labels.
+With labels, contacts, excitation and outputs can name nodes instead of
+DOF indices::
+
+    [excitation]
+    dofs = [[101, 2]]           # [node id, component] pairs or DOF indices
+
+    [[contact]]
+    nodes = [101, 102]          # one element per node (damper side)
+    other_nodes = [201, 202]    # the facing platform nodes; empty: the ground
+    components = [1, 2, 3]      # node components for t1, t2, n (-1: none)
 """
 
 from __future__ import annotations
@@ -75,6 +94,9 @@ class ModelSection:
     static_force: str = param("", "name of a constant force vector (N); empty: none")
     balance: bool = param(True, "add the constant force that carries the contact preloads")
     length_unit: str = param("m", "unit of the generalised displacements")
+    dof_map: str = param(
+        "", "text file with the (node, component) of each row, for OP4/Matrix Market/HB"
+    )
 
 
 @dataclass(frozen=True)
@@ -108,6 +130,9 @@ class ContactSection:
     dofs: list = param([], "per element [t1] or [t1, t2, n] DOFs (-1: no such direction)")
     other: list = param([], "platform DOFs per element (same shape); empty: against the ground")
     frames: list = param([], "per element 3x3 rows t1, t2, n when dofs are the node's x, y, z")
+    nodes: list = param([], "node ids of the elements (instead of dofs; needs node labels)")
+    other_nodes: list = param([], "facing node id per element (instead of other)")
+    components: list = param([1, 2, 3], "node components (1-6) for t1, t2, n; -1: none")
     mu: float = param(0.5, "friction coefficient", lo=0.0)
     kt_n_per_m: float = param(0.0, "tangential stiffness, N/m", lo=0.0)
     kt2_n_per_m: float = param(-1.0, "second tangential stiffness, N/m (default: kt_n_per_m)")
@@ -190,6 +215,103 @@ def _matrix(arrays: dict[str, Any], name: str, key: str, file: Path):
     )
 
 
+def _read_model_matrices(m: ModelSection, path: Path):
+    """M, K, C, static force and the row labels (or None) of the [model] section."""
+    from .. import readers
+
+    roles = {"mass": m.mass, "stiffness": m.stiffness}
+    if m.damping:
+        roles["damping"] = m.damping
+    dof_map = (path.parent / m.dof_map).resolve() if m.dof_map else None
+    if dof_map is not None and not dof_map.is_file():
+        raise InputError("model.dof_map", m.dof_map, f"an existing file (looked in {path.parent})")
+    if not m.matrices:
+        specs = {}
+        for role, spec in roles.items():
+            fname, hash_, name = str(spec).partition("#")
+            f = (path.parent / fname).resolve()
+            if not f.is_file():
+                raise InputError(
+                    f"model.{role}", spec,
+                    "a matrix file (model.matrices is empty), looked in " + str(path.parent),
+                )
+            specs[role] = f"{f}{hash_}{name}"
+        if m.static_force:
+            raise InputError("model.static_force", m.static_force,
+                             "empty when model.matrices is empty (a vector needs a .npz/.h5)")
+        ms = readers.read_matrices(specs, dof_map)
+        M, K = ms.matrices["mass"], ms.matrices["stiffness"]
+        return M, K, ms.matrices.get("damping"), None, ms
+    mfile = (path.parent / m.matrices).resolve()
+    if not mfile.is_file():
+        raise InputError(
+            "model.matrices", m.matrices, f"an existing file (looked in {path.parent})"
+        )
+    if readers.file_kind(mfile) != "numpy":
+        if m.static_force:
+            raise InputError("model.static_force", m.static_force,
+                             "empty for an FE export (a vector needs a .npz/.h5)")
+        ms = readers.read_matrices({r: f"{mfile}#{v}" for r, v in roles.items()}, dof_map)
+        M, K = ms.matrices["mass"], ms.matrices["stiffness"]
+        return M, K, ms.matrices.get("damping"), None, ms
+    arrays = _read_arrays(mfile)
+    M = _matrix(arrays, m.mass, "model.mass", mfile)
+    K = _matrix(arrays, m.stiffness, "model.stiffness", mfile)
+    C = _matrix(arrays, m.damping, "model.damping", mfile) if m.damping else None
+    fs = None
+    if m.static_force:
+        fs = np.asarray(_matrix(arrays, m.static_force, "model.static_force", mfile), float).ravel()
+    labels = readers.read_dof_map(dof_map) if dof_map else None
+    if labels is not None and len(labels) != M.shape[0]:
+        raise InputError("model.dof_map", m.dof_map, f"{M.shape[0]} rows (one per DOF)",
+                         f"it has {len(labels)}")
+    ms = readers.MatrixSet({"mass": M}, labels, mfile.name)
+    return M, K, C, fs, ms
+
+
+def _resolve_nodes(key: str, value: Any, ms) -> Any:
+    """Replace ``[node, component]`` entries of a DOF list by row indices."""
+    if not isinstance(value, list):
+        return value
+    from ..readers import component_number
+
+    out = []
+    for i, v in enumerate(value):
+        if isinstance(v, list):
+            if len(v) != 2:
+                raise InputError(f"{key}[{i}]", v, "a DOF index or a [node id, component] pair")
+            out.append(ms.index(v[0], component_number(v[1], f"{key}[{i}]"), f"{key}[{i}]"))
+        else:
+            out.append(v)
+    return out
+
+
+def _contact_by_node(g: ContactSection, ms, where: str) -> ContactSection:
+    """The same section with ``dofs``/``other`` filled from node ids and components."""
+    from ..readers import component_number
+
+    if g.dofs or g.other:
+        raise InputError(f"{where}.dofs", g.dofs, "empty when nodes are given (one or the other)")
+    comps = g.components
+    if not isinstance(comps, list) or not 1 <= len(comps) <= 3:
+        raise InputError(f"{where}.components", comps, "1 to 3 components for t1, t2, n")
+    comps = [-1 if c == -1 else component_number(c, f"{where}.components") for c in comps]
+    if g.other_nodes and len(g.other_nodes) != len(g.nodes):
+        raise InputError(f"{where}.other_nodes", g.other_nodes,
+                         f"{len(g.nodes)} node ids (one per element) or empty")
+
+    def row(node, k):
+        return [-1 if c == -1 else ms.index(node, c, f"{where}.{k}") for c in comps]
+
+    for k in ("nodes", "other_nodes"):
+        for j, v in enumerate(getattr(g, k)):
+            if isinstance(v, bool) or not isinstance(v, int):
+                raise InputError(f"{where}.{k}[{j}]", v, "a node id (whole number)")
+    dofs = [row(v, "nodes") for v in g.nodes]
+    other = [row(v, "other_nodes") for v in g.other_nodes]
+    return dataclasses.replace(g, dofs=dofs, other=other)
+
+
 def _int_list(key: str, value: Any, n: int, allow_none: bool = False) -> list[int]:
     if not isinstance(value, list) or not all(
         isinstance(v, int) and not isinstance(v, bool) for v in value
@@ -245,25 +367,14 @@ def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) ->
     contact = [load_record(ContactSection, g, f"contact[{i}].") for i, g in enumerate(groups)]
 
     m: ModelSection = sec["model"]
-    if not m.matrices:
-        raise InputError("model.matrices", "", "the name of a .npz or .h5 file")
-    mfile = (path.parent / m.matrices).resolve()
-    if not mfile.is_file():
-        raise InputError(
-            "model.matrices", m.matrices, f"an existing file (looked in {path.parent})"
-        )
-    arrays = _read_arrays(mfile)
-    M = _matrix(arrays, m.mass, "model.mass", mfile)
-    K = _matrix(arrays, m.stiffness, "model.stiffness", mfile)
-    C = _matrix(arrays, m.damping, "model.damping", mfile) if m.damping else None
+    M, K, C, fs, labels = _read_model_matrices(m, path)
     n = M.shape[0]
-    fs = None
-    if m.static_force:
-        fs = np.asarray(_matrix(arrays, m.static_force, "model.static_force", mfile), float).ravel()
 
     parts = []
     for i, g in enumerate(contact):
         where = f"contact[{i}]"
+        if g.nodes:
+            g = _contact_by_node(g, labels, where)
         if not g.dofs:
             raise InputError(f"{where}.dofs", [], "DOFs of at least one element")
         dofs = g.dofs if isinstance(g.dofs[0], list) else [g.dofs]
@@ -294,7 +405,7 @@ def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) ->
     elements = ContactElements.concat(parts) if parts else None
 
     e: ExcitationSection = sec["excitation"]
-    dofs = _int_list("excitation.dofs", e.dofs, n)
+    dofs = _int_list("excitation.dofs", _resolve_nodes("excitation.dofs", e.dofs, labels), n)
     if not dofs:
         raise InputError("excitation.dofs", [], "at least one loaded DOF")
     amps = _float_list("excitation.amplitudes_n", e.amplitudes_n)
@@ -321,7 +432,7 @@ def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) ->
     h: HbmSection = sec["hbm"]
     harm = _int_list("hbm.harmonics", h.harmonics, 10_001)
     o: OutputSection = sec["output"]
-    outs = _int_list("output.dofs", o.dofs, n)
+    outs = _int_list("output.dofs", _resolve_nodes("output.dofs", o.dofs, labels), n)
     if not outs:
         raise InputError("output.dofs", [], "at least one output DOF")
     names = tuple(str(v) for v in o.names) if o.names else tuple(f"dof{d}" for d in outs)

@@ -148,6 +148,9 @@ class CaseResult:
                 a["variant"], a["digest"], a["output"] = self.variant, self.digest, self.output
                 a["params"] = json.dumps(self.params, default=str, sort_keys=True)
                 a["timings"] = json.dumps(self.timings)
+                from .units import BRANCH_UNITS, CASE_UNITS, annotate
+
+                annotate(h, {**BRANCH_UNITS, **CASE_UNITS})
         return path
 
     @classmethod

@@ -54,6 +54,30 @@ def sci(value: float, digits: int = 2) -> str:
     return f"{mant}e{int(exp)}"
 
 
+ENERGY_FLOOR_REL = 1e-6
+"""Energies below this fraction of the largest one in a table or figure are round-off of a
+stuck (or rolling) contact: they are shown and printed as "stuck / 0", never as numbers."""
+STUCK_TEXT = "stuck / 0"
+
+
+def energy_floor(values: Sequence[float] | np.ndarray, rel: float = ENERGY_FLOOR_REL) -> float:
+    """The energy floor of a set of values: ``rel`` times the largest finite one (0 if none)."""
+    v = np.asarray(values, dtype=float).ravel()
+    v = v[np.isfinite(v)]
+    top = float(np.max(np.abs(v))) if v.size else 0.0
+    return rel * top
+
+
+def energy_text(value: float, floor: float, digits: int = 2) -> str:
+    """An energy for a table: ``sci`` above the floor, "stuck / 0" at or below it (or negative)."""
+    v = float(value)
+    if math.isnan(v):
+        return "n/a"
+    if v <= floor or v <= 0.0:
+        return STUCK_TEXT
+    return sci(v, digits)
+
+
 def fixed(value: float, digits: int = 4) -> str:
     """A number with ``digits`` significant digits (``n/a`` for NaN)."""
     v = float(value)
@@ -336,9 +360,15 @@ def _force_table(results: StudyResults, phase_deg: float, corner: str, value: An
 
 
 def energy_table(results: StudyResults, phase_deg: float, variant: str | None = None) -> Table:
-    """Friction energy per cycle at resonance, mJ: dampers x forces (paper Tables 1-2)."""
+    """Friction energy per cycle at resonance, mJ: dampers x forces (paper Tables 1-2).
+
+    Energies below :data:`ENERGY_FLOOR_REL` times the table's largest read
+    "stuck / 0" (round-off of a contact that does not slip).
+    """
+    cases = [c for c in results.select(phase_deg=phase_deg, variant=variant)]
+    floor = energy_floor([_at_peak(c)[2] for c in cases])
     return _force_table(results, phase_deg, "energy per cycle (mJ) at force",
-                        lambda c: _at_peak(c)[2], sci, variant)
+                        lambda c: _at_peak(c)[2], lambda v: energy_text(v, floor), variant)
 
 
 def peak_amplitude_table(results: StudyResults, phase_deg: float,

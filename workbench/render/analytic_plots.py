@@ -28,7 +28,7 @@ from ..analytic.charts import (
     slip_along_table,
 )
 from ..analytic.cone import ConeDesign
-from .common import pyplot, save_figure
+from .common import pyplot, save_figure, styled
 
 log = logging.getLogger(__name__)
 
@@ -64,6 +64,7 @@ def _styles(ax, styles: list[tuple[str, str]], loc: str = "upper right") -> None
         ax.add_artist(first)
 
 
+@styled
 def plot_inclination(table: Table, design: ConeDesign, path: str | Path) -> Path:
     """Damper inclination gamma vs cone angle, one curve per platform angle (paper Fig. 3)."""
     plt = pyplot()
@@ -88,6 +89,7 @@ def plot_inclination(table: Table, design: ConeDesign, path: str | Path) -> Path
     return save_figure(fig, path)
 
 
+@styled
 def plot_slip_along(table: Table, design: ConeDesign, path: str | Path) -> Path:
     """Slip along the damper for several cone angles (paper Fig. 5) and its exact 3-D value."""
     plt = pyplot()
@@ -116,6 +118,7 @@ def plot_slip_along(table: Table, design: ConeDesign, path: str | Path) -> Path:
     return save_figure(fig, path)
 
 
+@styled
 def plot_max_slip(table: Table, design: ConeDesign, path: str | Path) -> Path:
     """Largest slip vs cone angle varying beta, R1 and L (paper Fig. 6 a-c), paper and 3-D."""
     plt = pyplot()
@@ -150,6 +153,7 @@ def plot_max_slip(table: Table, design: ConeDesign, path: str | Path) -> Path:
     return save_figure(fig, path)
 
 
+@styled
 def plot_comparison(table: Table, design: ConeDesign, path: str | Path) -> Path:
     """Paper eq 6 against the exact 3-D slip over all cone angles: values, ratio, difference."""
     plt = pyplot()
@@ -197,6 +201,7 @@ def plot_comparison(table: Table, design: ConeDesign, path: str | Path) -> Path:
     return save_figure(fig, path)
 
 
+@styled
 def plot_contact_slip(table: Table, design: ConeDesign, path: str | Path) -> Path:
     """The cone in the groove with slip-coloured contact points and arrows; slip components."""
     from ..analytic.rigid import groove_geometry

@@ -11,8 +11,11 @@ translucent:
   the 3-D maps and the status charts agree), with the count of each;
 * ``*_energy.png``: the same spheres coloured by the friction energy per
   cycle of each pair in mJ, on a log colour scale when the values span
-  more than two decades (pairs below 1e-6 of the largest are shown at the
-  bottom colour; the bar says so).
+  more than two decades. Pairs at or below the energy floor (1e-6 of the
+  largest, :data:`workbench.post.tables.ENERGY_FLOOR_REL`) are grey and
+  counted as "stuck / 0". A study draws all its maps on one colour scale
+  (:func:`energy_scale` over every mapped case), so in-phase and
+  out-of-phase maps, and the dampers, compare by colour.
 
 The damper surface comes from ``damper.msh`` of the damper's geometry
 folder (the second-order tetrahedra's outer faces); the contact points come
@@ -98,6 +101,26 @@ def _screenshot(p, png: Path) -> Path:
     return png
 
 
+STUCK_COLOR = "#9e9e9e"
+
+
+def energy_scale(energies) -> tuple[float, float, bool]:
+    """(lowest, highest, log) colour range of friction energies (mJ) above the floor."""
+    from ..post.tables import energy_floor
+
+    e = np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in energies]) \
+        if len(energies) else np.zeros(0)
+    e = e[np.isfinite(e)]
+    floor = energy_floor(e)
+    up = e[e > floor]
+    if up.size == 0:
+        return 0.0, 1.0, False
+    top = float(up.max())
+    if top / float(up.min()) > 100.0:
+        return float(up.min()), top, True
+    return 0.0, top, False
+
+
 def _heading(case: CaseResult, i: int) -> str:
     f = case.freq_hz[i]
     what = "resonance" if i == case.peak_index else f"point {i}"
@@ -107,11 +130,13 @@ def _heading(case: CaseResult, i: int) -> str:
 
 
 def render_contact_maps(case: CaseResult, geometry_dir: str | Path, out_stem: str | Path, *,
-                        point: int | None = None) -> list[Path]:
+                        point: int | None = None,
+                        scale: tuple[float, float, bool] | None = None) -> list[Path]:
     """Write ``<out_stem>_status.png`` and ``<out_stem>_energy.png``; return both paths.
 
     ``geometry_dir`` holds the damper's ``damper.msh``; ``point`` is the
-    index on the case's branch (default: its resonance peak).
+    index on the case's branch (default: its resonance peak); ``scale`` the
+    energy colour range (:func:`energy_scale`; default: this case's own).
     """
     pv = offscreen_pyvista()
     geometry_dir = Path(geometry_dir)
@@ -160,32 +185,35 @@ def render_contact_maps(case: CaseResult, geometry_dir: str | Path, out_stem: st
     _camera(p, surface)
     status_png = _screenshot(p, out_stem.with_name(out_stem.name + "_status.png"))
 
-    # energy: one glyph set coloured by the pair's energy (log when it spans decades)
+    # energy: pairs above the floor coloured on the (shared) scale, the others grey
+    from ..post.tables import ENERGY_FLOOR_REL, STUCK_TEXT
+
     p = base()
-    top = float(np.nanmax(energy)) if energy.size else 0.0
-    positive = energy[energy > 0]
-    log_scale = bool(positive.size and top > 0 and top / positive.min() > 100.0)
-    if top <= 0.0:
-        values, clim, title = np.zeros_like(energy), (0.0, 1.0), "friction energy per cycle (mJ)"
-    elif log_scale:
-        floor = top * LOG_FLOOR
-        values = np.clip(energy, floor, None)
-        clim = (max(floor, float(positive.min())), top)
-        title = "friction energy per cycle (mJ), log"
-        if positive.min() < floor or (energy <= 0).any():
-            title += f"; < {floor:.1e} at the floor"
-    else:
-        values, clim, title = energy, (0.0, top), "friction energy per cycle (mJ)"
-    cloud = pv.PolyData(pts)
-    cloud["energy_mj"] = values
-    glyphs = cloud.glyph(geom=sphere, scale=False, orient=False)
-    p.add_mesh(glyphs, scalars="energy_mj", cmap=ENERGY_CMAP, clim=clim, log_scale=log_scale,
-               lighting=False,
-               scalar_bar_args=dict(title="", vertical=False, n_labels=5, fmt="%.1e",
-                                    position_x=0.25, position_y=0.035, width=0.5, height=0.08,
-                                    label_font_size=13))
-    p.add_text(title, position=(int(0.25 * WINDOW[0]), int(0.125 * WINDOW[1])), font_size=11)
-    p.add_text(f"total {float(energy.sum()):.3g} mJ per cycle over {energy.size} pairs",
+    lo, hi, log_scale = scale if scale is not None else energy_scale([energy])
+    floor = ENERGY_FLOOR_REL * hi if hi > 0 else 0.0
+    slip = np.isfinite(energy) & (energy > floor)
+    n_stuck = int((~slip).sum())
+    title = "friction energy per cycle (mJ)" + (", log" if log_scale else "")
+    if scale is not None:
+        title += "; one scale for every map of the study"
+    if slip.any():
+        cloud = pv.PolyData(pts[slip])
+        cloud["energy_mj"] = np.clip(energy[slip], lo if log_scale else 0.0, hi)
+        glyphs = cloud.glyph(geom=sphere, scale=False, orient=False)
+        p.add_mesh(glyphs, scalars="energy_mj", cmap=ENERGY_CMAP, clim=(lo, hi),
+                   log_scale=log_scale, lighting=False,
+                   scalar_bar_args=dict(title="", vertical=False, n_labels=5, fmt="%.1e",
+                                        position_x=0.25, position_y=0.035, width=0.5,
+                                        height=0.08, label_font_size=13))
+        p.add_text(title, position=(int(0.25 * WINDOW[0]), int(0.125 * WINDOW[1])),
+                   font_size=11)
+    if n_stuck:
+        glyphs = pv.PolyData(pts[~slip]).glyph(geom=sphere, scale=False, orient=False)
+        p.add_mesh(glyphs, color=STUCK_COLOR, lighting=False)
+        p.add_legend([[f"{STUCK_TEXT} ({n_stuck}): <= {ENERGY_FLOOR_REL:g} x "
+                       f"{hi:.2g} mJ", STUCK_COLOR]],
+                     bcolor="white", face="circle", size=(0.3, 0.06), loc="upper left")
+    p.add_text(f"total {float(energy[slip].sum()):.3g} mJ per cycle over {energy.size} pairs",
                font_size=10, position="lower_left")
     _camera(p, surface)
     energy_png = _screenshot(p, out_stem.with_name(out_stem.name + "_energy.png"))

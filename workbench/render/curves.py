@@ -1,4 +1,4 @@
-"""Frequency response curves of the harmonic balance (matplotlib, Agg).
+"""Frequency response curves of the harmonic balance (matplotlib, no pyplot state).
 
 :func:`plot_frf` draws one curve per excitation level (stable parts solid,
 unstable parts dashed, the peak marked); :func:`plot_status_map` draws the
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import pyplot, save_figure
+from .common import pyplot, readable_log, save_figure, styled
 
 STATUS_COLORS = ("#2b6cb0", "#d9822b", "#7cb342", "#9e9e9e")
 STATUS_LABELS = ("stuck", "stick-slip", "partial separation", "full separation")
@@ -31,20 +31,29 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(starts, stops, strict=True))
 
 
+@styled
 def plot_frf(
     branches: Sequence,
-    path: str | Path,
+    path: str | Path | None,
     *,
     output: int = 0,
     unit_scale: float = 1.0,
     unit: str = "m",
     title: str = "",
-    per_level: bool = False,
+    per_level: bool = True,
+    force_per_level_n: float = 1.0,
+    log: bool = True,
 ) -> Path:
-    """Output amplitude against frequency for each branch; unstable parts dashed.
+    """Receptance (amplitude per newton) against frequency, one curve per force level.
 
-    ``unit_scale`` multiplies the amplitudes (1e3 for mm from m);
-    ``per_level`` divides them by the excitation level (a receptance).
+    Each branch's force amplitude is ``level * force_per_level_n`` (N: the
+    largest harmonic force of the model per unit level). ``per_level``
+    divides the amplitude by it, so curves of different forces lie on one
+    another while the contact sticks and part where it slips; the log axis
+    (``log``) shows both ends of that story. Every computed point is a dot
+    on its curve; unstable parts are dashed, the peak is circled (hollow:
+    unstable), a cross marks where a branch failed.
+    ``unit_scale`` multiplies the amplitudes (1e3 for mm from m).
     """
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
@@ -53,34 +62,40 @@ def plot_frf(
         if b.n_points == 0:
             continue
         f = b.freq_hz
-        a = b.out_amp[:, output] * unit_scale / (b.level if per_level and b.level else 1.0)
-        label = f"level {b.level:g}" + (" (failed)" if b.failed else "")
+        force = b.level * force_per_level_n
+        a = b.out_amp[:, output] * unit_scale / (force if per_level and force else 1.0)
+        label = f"F = {force:.3g} N" + (" (failed)" if b.failed else "")
         first = True
         for s, e in _runs(b.stable):
             seg = slice(max(s - 1, 0), e)  # join the segments
-            ax.plot(
-                f[seg],
-                a[seg],
-                "-" if b.stable[s] else "--",
-                color=col,
-                lw=1.4,
-                label=label if first else None,
-            )
+            ax.plot(f[seg], a[seg], "-" if b.stable[s] else "--", color=col, lw=1.4,
+                    label=label if first else None)
             first = False
+        ax.plot(f, a, ".", color=col, ms=2.5)  # the computed points
         i = b.peak(output)
-        ax.plot(f[i], a[i], "o", color=col, ms=4, mfc=col if b.stable[i] else "white")
+        ax.plot(f[i], a[i], "o", color=col, ms=6, mfc=col if b.stable[i] else "white")
         if b.failed:
             ax.plot(f[-1], a[-1], "x", color=col, ms=7)
     name = branches[0].output_names[output] if branches and branches[0].output_names else "output"
-    ylab = f"{name} amplitude / level ({unit}/N)" if per_level else f"{name} amplitude ({unit})"
+    ylab = f"receptance: {name} amplitude / F ({unit}/N)" if per_level else \
+        f"{name} amplitude ({unit})"
+    if log and any(b.n_points for b in branches):
+        ax.set_yscale("log")
+        readable_log(ax, "y")
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(ylab)
     ax.set_title(title or "frequency response (solid: stable, dashed: unstable)")
     if any(b.n_points for b in branches):
-        ax.legend(loc="best")
+        from matplotlib.lines import Line2D
+
+        handles, labels = ax.get_legend_handles_labels()
+        handles += [Line2D([], [], color="0.3", ls="--", label="unstable (Hill)"),
+                    Line2D([], [], color="0.3", ls="none", marker="o", label="peak")]
+        ax.legend(handles=handles, loc="best", title="excitation force")
     return save_figure(fig, path)
 
 
+@styled
 def plot_status_map(branch, path: str | Path, title: str = "") -> Path:
     """Contact status of every element (y) at every point (x: frequency) of a branch.
 

@@ -9,8 +9,12 @@
   front (non-dominated settings) drawn as a step line, the tolerance as a
   horizontal line and the picked setting circled.
 
-Errors of exactly zero (or below :data:`ERR_FLOOR` percent) cannot be drawn
-on a log axis: they are drawn at the floor with open markers.
+Errors of exactly zero (the reference itself) or below :data:`ERR_FLOOR`
+percent have no place on a log axis and are not drawn as if they were
+1e-4 %: open markers sit on the bottom edge of the axes, in a band labelled
+"< 1e-4 % (reference: 0)". An axis whose values span less than a factor 3
+(compute times of settings that cost the same) is linear, so its ticks read
+distinct values.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .common import pyplot, save_figure
+from .common import pyplot, save_figure, styled
 from .study_figures import _EXTRA_COLORS, FIGSIZE, force_colors
 
 ERR_FLOOR = 1e-4  # percent
@@ -36,21 +40,54 @@ KNOB_MARKERS = {"mesh-size": "o", "modes": "s", "harmonics": "^", "nt": "v",
                 "points-per-line": "D", "rigid-damper": "P", "base": "*", "combined": "X"}
 
 
+EDGE_Y = 0.035  # axes fraction of the bottom band of errors below the floor
+EDGE_TEXT = f"< {ERR_FLOOR:g} % (reference: 0)"
+
+
 def _floor(e: float | None) -> tuple[float | None, bool]:
+    """(value to draw, below the floor): below the floor there is no value to draw."""
     if e is None or not math.isfinite(e):
         return None, False
-    return (ERR_FLOOR, True) if e < ERR_FLOOR else (e, False)
+    return (None, True) if e < ERR_FLOOR else (e, False)
+
+
+def _edge(ax, xs: Sequence[float], **kw) -> None:
+    """Open markers on the bottom edge of ``ax`` at data x: errors below the floor."""
+    if not xs:
+        return
+    from matplotlib.transforms import blended_transform_factory
+
+    tr = blended_transform_factory(ax.transData, ax.transAxes)
+    ax.plot(list(xs), [EDGE_Y] * len(xs), ls="none", transform=tr, clip_on=False, **kw)
+    if not getattr(ax, "_edge_labelled", False):
+        ax.text(0.01, 2.2 * EDGE_Y, EDGE_TEXT, transform=ax.transAxes, fontsize=6.5,
+                color="0.35", va="bottom")
+        ax._edge_labelled = True
 
 
 def _log_axes(ax) -> None:
     """Log-log axes with plain number labels (1, 2, 5 x 10^k; three ticks on a narrow range)."""
     import numpy as np
-    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter, ScalarFormatter
 
-    ax.set_xscale("log")
-    ax.set_yscale("log")
     fmt = FuncFormatter(lambda v, _: f"{v:.3g}")
+    for name in ("x", "y"):
+        lo, hi = sorted(ax.dataLim.intervalx if name == "x" else ax.dataLim.intervaly)
+        if lo > 0 and hi / lo >= 3.0:
+            getattr(ax, f"set_{name}scale")("log")
+        else:  # a narrow range: linear, with as many digits as the ticks need
+            getattr(ax, f"{name}axis").set_major_formatter(ScalarFormatter(useOffset=False))
+    if getattr(ax, "_edge_labelled", False):  # room under the data for the below-floor band
+        lo, hi = ax.get_ylim()
+        if ax.get_yscale() == "log" and lo > 0:
+            ax.set_ylim(lo / (hi / lo) ** 0.15, hi)
+        else:
+            ax.set_ylim(lo - 0.15 * (hi - lo), hi)
+        ax.plot([0, 1], [2 * EDGE_Y, 2 * EDGE_Y], color="0.6", lw=0.8, ls=":",
+                transform=ax.transAxes)
     for axis, lim in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+        if axis.get_scale() != "log":
+            continue
         axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
         axis.set_major_formatter(fmt)
         axis.set_minor_formatter(NullFormatter())
@@ -66,6 +103,7 @@ def _force_of(cond: str) -> float:
     return float(m.group(1)) if m else 0.0
 
 
+@styled
 def plot_knob(knob: str, levels: Sequence[str], times_s: Sequence[float],
               errors: dict[str, dict[str, Sequence[float | None]]], path: str | Path) -> Path:
     """Error vs time of one knob's levels: ``errors[quantity][condition][level]`` in percent."""
@@ -78,24 +116,30 @@ def plot_knob(knob: str, levels: Sequence[str], times_s: Sequence[float],
     for ax, q in zip(axes, qs, strict=True):
         for cond in conds:
             col = colors[_force_of(cond)]
-            xs, ys, open_ = [], [], []
+            xs, ys, low = [], [], []
             for t, e in zip(times_s, errors[q][cond], strict=True):
                 y, fl = _floor(e)
+                if fl:
+                    low.append(t)
                 if y is None:
                     continue
                 xs.append(t)
                 ys.append(y)
-                open_.append(fl)
-            ax.plot(xs, ys, "-", color=col, lw=1.3, label=cond)
-            for x, y, fl in zip(xs, ys, open_, strict=True):
-                ax.plot([x], [y], "o", ms=5, color=col, mfc="white" if fl else col)
+            ax.plot(xs, ys, "-o", color=col, lw=1.3, ms=5, label=cond)
+            _edge(ax, low, marker="o", ms=5, mfc="white", mec=col)
+        _log_axes(ax)
         for i, (t, lab) in enumerate(zip(times_s, levels, strict=True)):
             ys = [_floor(errors[q][c][i])[0] for c in conds]
             ys = [y for y in ys if y is not None]
             if ys:
                 ax.annotate(lab, (t, max(ys)), textcoords="offset points", xytext=(3, 4),
                             fontsize=7)
-        _log_axes(ax)
+            else:  # every condition below the floor: label it on the edge
+                from matplotlib.transforms import blended_transform_factory
+
+                ax.annotate(lab, (t, EDGE_Y), textcoords="offset points", xytext=(3, 4),
+                            fontsize=7, xycoords=blended_transform_factory(ax.transData,
+                                                                           ax.transAxes))
         ax.set_xlabel("compute time of the setting, s")
         ax.set_ylabel(f"{QUANTITY_TITLES.get(q, q)} error, %")
         ax.set_title(QUANTITY_TITLES.get(q, q), fontsize=10)
@@ -113,6 +157,7 @@ def pareto_indices(times: Sequence[float], errs: Sequence[float | None]) -> list
     return pareto_front(list(zip(times, errs, strict=True)))
 
 
+@styled
 def plot_pareto(points: Sequence[dict[str, Any]], path: str | Path, *,
                 tolerance_pct: float | None = None, picked: str | None = None,
                 reference_time_s: float | None = None) -> Path:
@@ -133,20 +178,22 @@ def plot_pareto(points: Sequence[dict[str, Any]], path: str | Path, *,
     for ax, q in zip(axes.ravel(), qs, strict=True):
         for g in groups:
             sel = [p for p in points if p["group"] == g]
-            xs, ys, fl = [], [], []
+            xs, ys, low = [], [], []
             for p in sel:
                 y, f = _floor(p.get(q))
+                if f:
+                    low.append(p["time_s"])
                 if y is not None:
                     xs.append(p["time_s"])
                     ys.append(y)
-                    fl.append(f)
-            if not xs:
-                continue
             m = KNOB_MARKERS.get(g, "o")
-            ax.scatter(xs, ys, marker=m, s=34, label=g,
-                       facecolors=["white" if f else gcol[g] for f in fl],
-                       edgecolors=gcol[g], zorder=3)
+            if xs:
+                ax.scatter(xs, ys, marker=m, s=34, label=g, facecolors=gcol[g],
+                           edgecolors=gcol[g], zorder=3)
+            _edge(ax, low, marker=m, ms=6, mfc="white", mec=gcol[g],
+                  label=None if xs else g)
         front = pareto_indices([p["time_s"] for p in points], [p.get(q) for p in points])
+        front = [i for i in front if _floor(points[i][q])[0] is not None]
         if front:
             fx = [points[i]["time_s"] for i in front]
             fy = [_floor(points[i][q])[0] for i in front]

@@ -12,6 +12,8 @@ Manifest layout (all paths relative to DIR)::
       "title": str, "subtitle": str, "created": ISO time,
       "summary": [str, ...],                     # headline lines
       "inputs": {option: value}, "sources": {option: origin},
+      "inputs_used": [{"option", "value", "unit", "source"}, ...],  # the report's table
+                                                 # (workbench.post.inputs.used_inputs)
       "versions": {package: version},
       "timings": {stage: seconds},
       "sections": [
@@ -154,8 +156,27 @@ def render_html(manifest: dict[str, Any], root: Path) -> str:
             )
             n_fig += 1
     parts.append("<h2 id='inputs'>Inputs</h2>")
-    parts.append(_kv_table(manifest.get("inputs", {}), ("option", "value", "from"),
-                           manifest.get("sources", {})))
+    if not manifest.get("inputs_used") and manifest.get("inputs", {}).get("kind"):
+        # a manifest written before inputs_used existed: resolve it now (from the
+        # geometry and contact files as they are today)
+        from ..post.inputs import used_inputs
+
+        try:
+            manifest = dict(manifest, inputs_used=used_inputs(manifest["inputs"],
+                                                              manifest.get("sources", {})))
+        except Exception as e:  # noqa: BLE001 - the raw table below is still right
+            log.warning("inputs of an older manifest not resolved: %s", e)
+    if manifest.get("inputs_used"):
+        parts.append("<p class='sub'>The values every case was computed with (options left "
+                     "unset take the geometry and contact files' values, named in the last "
+                     "column); only the options of this kind of study.</p>")
+        rows = [["option", "value", "unit", "from"]]
+        rows += [[r["option"], _fmt(r["value"]), r.get("unit", ""), r.get("source", "")]
+                 for r in manifest["inputs_used"]]
+        parts.append(_table_html(rows))
+    else:  # a manifest written before the inputs_used list existed
+        parts.append(_kv_table(manifest.get("inputs", {}), ("option", "value", "from"),
+                               manifest.get("sources", {})))
     parts.append("<h2 id='software'>Software and cost</h2><h3>Versions</h3>")
     parts.append(_kv_table(manifest.get("versions", {}), ("package", "version")))
     parts.append("<h3>Compute time of each stage</h3>")

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .common import pyplot, save_figure
+from .common import pyplot, save_figure, styled
 
 STATUS_STYLE = {"ok": ("#59a14f", "ok"), "wrong": ("#f28e2b", "wrong answer"),
                 "failed": ("#e15759", "failed")}
@@ -34,6 +34,7 @@ def _cell_text(c: dict[str, Any]) -> str:
     return t
 
 
+@styled
 def plot_failure_map(cells: Sequence[dict[str, Any]], methods: Sequence[str],
                      cases: Sequence[str], path: str | Path) -> Path:
     """Grid of methods (rows) x cases (columns): colour = status, text = iterations and time."""
@@ -78,6 +79,7 @@ def _draw(ax, f, a, stable, color, label, lw=1.2, ls="-"):
         ax.plot(f, au, color="0.55", lw=5.0, alpha=0.35, solid_capstyle="round", zorder=1)
 
 
+@styled
 def plot_branches(cells: Sequence[dict[str, Any]], cases: Sequence[str],
                   path: str | Path) -> Path:
     """One panel per hard case: every method's branch (mm against Hz); failures end with x."""
@@ -110,33 +112,39 @@ def plot_branches(cells: Sequence[dict[str, Any]], cases: Sequence[str],
     return save_figure(fig, path)
 
 
+@styled
 def plot_hbm_vs_time(checks: Sequence[dict[str, Any]], path: str | Path) -> Path:
-    """One panel per small model: the HBM branch and the time-integration amplitudes."""
+    """One panel per small model: the HBM branch and the time-integration amplitudes.
+
+    The models' DOFs are in metres; amplitudes are drawn in mm, as in every
+    other figure of the workbench.
+    """
     plt = pyplot()
     n = len(checks)
     fig, axes = plt.subplots(1, n, figsize=(max(4.6 * n, 7.0), 3.8), squeeze=False)
     for ax, ch in zip(axes[0], checks, strict=True):
         f = np.asarray(ch["freq_hz"])
-        a = np.asarray(ch["amp"])
+        a = 1e3 * np.asarray(ch["amp"])  # m -> mm
         st = np.asarray(ch["stable"], bool)
         ax.plot(f, np.where(st, a, np.nan), color="#1f6fb4", lw=1.4, label="HBM (stable)")
         ax.plot(f, np.where(~st, a, np.nan), color="#1f6fb4", lw=1.2, ls="--",
                 label="HBM (Hill-unstable)")
         for r in ch["points"]:
             filled = r["ti_converged"]
-            ax.plot(r["freq_hz"], r["ti_amplitude"], "o", ms=7, mew=1.5, color="#e15759",
+            ax.plot(r["freq_hz"], 1e3 * r["ti_amplitude"], "o", ms=7, mew=1.5, color="#e15759",
                     mfc="#e15759" if filled else "none")
             label = f"{r['diff_pct']:+.2g}%"
             near = r.get("diff_nearest_pct")
             if near is not None and abs(near - r["diff_pct"]) > 1e-9:
                 label += f" (nearest {near:+.2g}%)"
-            ax.annotate(label, (r["freq_hz"], r["ti_amplitude"]), textcoords="offset points",
+            ax.annotate(label, (r["freq_hz"], 1e3 * r["ti_amplitude"]),
+                        textcoords="offset points",
                         xytext=(5, 4), fontsize=7)
         ax.plot([], [], "o", color="#e15759", label="time integration (periodic)")
         ax.plot([], [], "o", color="#e15759", mfc="none", label="time integration (not periodic)")
         ax.set_title(f"{ch['model']} ({ch['n_dofs']} DOFs)", fontsize=9)
-        ax.set_xlabel("frequency, Hz")
-        ax.set_ylabel("peak |y|, m")
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel("peak |y| (mm)")
         ax.margins(y=0.12)
     h, lab = axes[0][0].get_legend_handles_labels()
     fig.legend(h, lab, loc="lower center", ncol=4, frameon=False, fontsize=8)

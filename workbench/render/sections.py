@@ -238,8 +238,10 @@ def _peaks_and_energy(b: _Builder, variant: str) -> None:
                    ["Energy dissipated by friction per cycle at the resonance peak of each "
                     "branch, summed over every contact pair, mJ; one table per family with "
                     "the dampers in rows and the forces in columns, as in the paper's "
-                    "Tables 1-2. Values many decades below the others (of order 1e-18 mJ) are "
-                    "round-off: those contacts do not slip."])
+                    "Tables 1-2. An energy at or below 1e-6 times the largest of its table "
+                    "or figure is round-off of contacts that do not slip: it reads "
+                    "'stuck / 0' in the tables and sits in the 'stuck / 0' strip under "
+                    "the figure's log axis."])
     for p in families(r):
         fam = family_name(p)
         cases = r.select(phase_deg=p, variant=variant)
@@ -304,28 +306,33 @@ def _contact_maps(b: _Builder, variant: str, geometry_dirs: dict[str, Path]) -> 
                     ["Each contact pair painted at its point on the damper (seen from above "
                      "the groove, the platforms left out, platform 1's contact at the bottom) "
                      "at the resonance of the highest force: its status, and its friction "
-                     "energy per cycle in mJ."])
+                     "energy per cycle in mJ, on one colour scale for every map (grey: "
+                     "stuck / 0, at or below 1e-6 of the largest)."])
+    mapped = []
     for p in families(r):
-        fam = family_name(p)
         for d in dict.fromkeys(c.damper for c in r.select(phase_deg=p, variant=variant)):
-            if d not in geometry_dirs:
-                continue
             own = [c for c in curve_set(r, d, p, variant) if c.branch.n_points]
-            if not own:
-                continue
-            c = own[-1]
-            stem = b.fig_dir / f"contact_{_fam_slug(p)}_{slug(d)}"
-            base = f"{d} damper, {fam}, F = {c.force_n:g} N, at resonance"
-            entries = [{"path": f"{FIGURES}/{stem.name}_status.png",
-                        "caption": f"{base}: contact status of every pair (stuck, stick-slip, "
-                                   "partial or full separation) on the damper surface."
-                                   + _failures([c])},
-                       {"path": f"{FIGURES}/{stem.name}_energy.png",
-                        "caption": f"{base}: friction energy per cycle of every pair, mJ."
-                                   + _failures([c])}]
-            sec.figures.extend(entries)
-            b.jobs.append(_Job(lambda c=c, g=geometry_dirs[d], s=stem:
-                               render_contact_maps(c, g, s), sec, entries, optional=True))
+            if d in geometry_dirs and own:
+                mapped.append((p, d, own[-1]))
+    # one energy colour scale for every map: families and dampers compare by colour
+    from .contact_maps import energy_scale
+
+    scale = energy_scale([c.energy_mj[c.peak_index] for _, _, c in mapped])
+    for p, d, c in mapped:
+        fam = family_name(p)
+        stem = b.fig_dir / f"contact_{_fam_slug(p)}_{slug(d)}"
+        base = f"{d} damper, {fam}, F = {c.force_n:g} N, at resonance"
+        entries = [{"path": f"{FIGURES}/{stem.name}_status.png",
+                    "caption": f"{base}: contact status of every pair (stuck, stick-slip, "
+                               "partial or full separation) on the damper surface."
+                               + _failures([c])},
+                   {"path": f"{FIGURES}/{stem.name}_energy.png",
+                    "caption": f"{base}: friction energy per cycle of every pair, mJ."
+                               + _failures([c])}]
+        sec.figures.extend(entries)
+        b.jobs.append(_Job(lambda c=c, g=geometry_dirs[d], s=stem:
+                           render_contact_maps(c, g, s, scale=scale), sec, entries,
+                           optional=True))
 
 
 # ---- sweeps ---------------------------------------------------------------------------

@@ -48,7 +48,7 @@ from ..post.tables import (
 from ..post.tables import (
     stability_runs as _runs,
 )
-from .common import pyplot, save_figure
+from .common import pyplot, readable_log, save_figure, styled
 
 log = logging.getLogger(__name__)
 
@@ -143,25 +143,7 @@ def _side_legends(fig, first: tuple[list, str | None],
                    loc="outside right lower", title=title2)
 
 
-def _readable_log(ax, which: str = "both") -> None:
-    """Plain-number tick labels (0.1, 0.2, 0.5, 1, 2, ...) on log axes spanning <= 3 decades.
-
-    Wider axes keep matplotlib's powers of ten.
-    """
-    from matplotlib import ticker
-
-    names = ("x", "y") if which == "both" else (which,)
-    for name in names:
-        axis = getattr(ax, f"{name}axis")
-        if axis.get_scale() != "log":
-            continue
-        lo, hi = sorted(ax.get_xlim() if name == "x" else ax.get_ylim())
-        if lo <= 0 or hi / lo > 1e3:
-            continue
-        fmt = ticker.FuncFormatter(lambda v, _: f"{v:g}")
-        axis.set_major_formatter(fmt)
-        axis.set_minor_locator(ticker.LogLocator(subs=(2.0, 5.0)))
-        axis.set_minor_formatter(fmt)
+_readable_log = readable_log  # (moved to common: the FRF figures use it too)
 
 
 def _wants_log(values: Sequence[float], ratio: float = 20.0) -> bool:
@@ -194,6 +176,7 @@ def _dampers(cases: Sequence[CaseResult]) -> list[str]:
 # ---- receptances (paper Figs 9-10) ------------------------------------------------------
 
 
+@styled
 def plot_receptances(cases: Sequence[CaseResult], path: str | Path, *,
                      forces: Sequence[float] | None = None, title: str | None = None) -> Path:
     """Receptance vs frequency of one damper and one family, every force in one axes.
@@ -233,6 +216,7 @@ def plot_receptances(cases: Sequence[CaseResult], path: str | Path, *,
     return save_figure(fig, path)
 
 
+@styled
 def plot_receptance_overlay(cases: Sequence[CaseResult], path: str | Path, *,
                             title: str | None = None) -> Path:
     """Every damper's receptances of one family in one axes (the paper's Fig. 9 manner).
@@ -274,6 +258,7 @@ def plot_receptance_overlay(cases: Sequence[CaseResult], path: str | Path, *,
     return save_figure(fig, path)
 
 
+@styled
 def plot_sweep_receptances(cases: Sequence[CaseResult], option: str, path: str | Path, *,
                            title: str | None = None) -> Path:
     """Receptances of one damper, family and force, one curve per value of the swept option."""
@@ -322,6 +307,7 @@ def _proportional_guide(ax, forces: np.ndarray, values: np.ndarray) -> None:
             label="proportional to F (linear)")
 
 
+@styled
 def plot_peak_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
                        title: str | None = None) -> Path:
     """Largest response amplitude vs excitation force, one curve per damper (paper Fig. 11).
@@ -350,7 +336,7 @@ def plot_peak_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
     if lowest and forces.size > 1:
         f0, a0 = min(lowest)
         _proportional_guide(ax, forces, a0 * forces / f0)
-    if forces.size > 1 and forces.max() / forces.min() > 5:
+    if forces.size > 1:  # log-log: the linear guide is a line of slope 1 at any force span
         ax.set_xscale("log")
         ax.set_yscale("log")
     ax.set(xlabel="excitation force F (N)", ylabel="peak response amplitude (mm)",
@@ -360,40 +346,119 @@ def plot_peak_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
     return save_figure(fig, path)
 
 
+@styled
 def plot_energy_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
                          title: str | None = None) -> Path:
     """Friction energy per cycle at resonance vs force, one curve per damper (log y).
 
-    The values of the paper's Tables 1-2 as a figure; energies at round-off
-    level (a rolling damper) stay visible on the log axis; zero or missing
-    values are left out and said so in the legend.
+    The values of the paper's Tables 1-2 as a figure. Energies at or below
+    the floor (:data:`workbench.post.tables.ENERGY_FLOOR_REL` times the
+    largest in the figure: round-off of contacts that stick or roll) are not
+    numbers: they sit in a "stuck / 0" strip under the log axis, one row per
+    damper, and the floor is written on it. Missing values (a failed
+    branch) are said so in the legend.
     """
+    from ..post.tables import ENERGY_FLOOR_REL, STUCK_TEXT, energy_floor
+
     cases = _one_family(cases, "cases")
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=FIGSIZE, layout="constrained")
-    for d, pc in _by_damper(cases):
+    curves = list(_by_damper(cases))
+    floor = energy_floor(np.concatenate([pc.energy_mj for _, pc in curves]))
+    stuck_any = any((np.isfinite(pc.energy_mj) & (pc.energy_mj <= floor)).any()
+                    for _, pc in curves)
+    if stuck_any:
+        fig, (ax, az) = plt.subplots(2, 1, figsize=(FIGSIZE[0], FIGSIZE[1] + 0.5), sharex=True,
+                                     layout="constrained",
+                                     gridspec_kw={"height_ratios": [6, 1 + 0.25 * len(curves)]})
+    else:
+        fig, ax = plt.subplots(figsize=FIGSIZE, layout="constrained")
+        az = None
+    for k, (d, pc) in enumerate(curves):
         col, ls, mk = damper_style(d)
-        ok = np.isfinite(pc.energy_mj) & (pc.energy_mj > 0)
+        e = pc.energy_mj
+        fin = np.isfinite(e)
+        up = fin & (e > floor)
+        low = fin & ~up
         lab = d + (" (failed)" if pc.failed.any() else "")
-        if (~ok).any():
-            lab += f" ({int((~ok).sum())} zero/missing not shown)"
-        ax.plot(pc.force_n[ok], pc.energy_mj[ok], color=col, ls=ls, lw=1.8, marker=mk, ms=6,
-                label=lab)
-        ax.plot(pc.force_n[ok & pc.failed], pc.energy_mj[ok & pc.failed], "x", color=col,
-                ms=10, mew=2)
+        if (~fin).any():
+            lab += f" ({int((~fin).sum())} missing)"
+        if low.any():
+            lab += f" ({int(low.sum())} stuck)"
+        ax.plot(pc.force_n[up], e[up], color=col, ls=ls, lw=1.8, marker=mk, ms=6, label=lab)
+        ax.plot(pc.force_n[up & pc.failed], e[up & pc.failed], "x", color=col, ms=10, mew=2)
+        if az is not None and low.any():
+            az.plot(pc.force_n[low], np.full(int(low.sum()), k), color=col, ls="none",
+                    marker=mk, ms=6, mfc="white", mec=col)
     forces = np.array(sorted({c.force_n for c in cases}))
     ax.set_yscale("log")
     if forces.size > 1 and forces.max() / forces.min() > 5:
         ax.set_xscale("log")
-    ax.set(xlabel="excitation force F (N)",
-           ylabel="friction energy per cycle at resonance (mJ)",
+    ax.set(ylabel="friction energy per cycle at resonance (mJ)",
            title=title or f"{cases[0].family}: energy dissipated by friction at resonance")
-    ax.legend(loc="upper left", title="damper")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="upper left", title="damper")
     _readable_log(ax)
+    bottom = az if az is not None else ax
+    bottom.set_xlabel("excitation force F (N)")
+    if az is not None:
+        az.set_ylim(-0.8, len(curves) - 0.2)
+        az.set_yticks([])
+        az.set_ylabel(STUCK_TEXT, rotation=0, ha="right", va="center")
+        az.grid(False, axis="y")
+        az.set_title(f"at or below {ENERGY_FLOOR_REL:g} x the largest energy "
+                     f"({floor:.1g} mJ): no slip, round-off only", fontsize=8, loc="left",
+                     color="0.3", pad=3)
     return save_figure(fig, path)
 
 
 # ---- contact status (paper Figs 12-13) --------------------------------------------------
+
+
+NOT_COMPUTED_COLOR = "#f2f2f2"
+NOT_COMPUTED_EDGE = "#b0b0b0"
+ZOOM_MAX_SHARE = 0.6  # no zoom row when the slipping part covers more of the band than this
+
+
+def _band(case: CaseResult, lo: float, hi: float) -> tuple[float, float]:
+    """The case's frequency band (Hz), or the computed span if it has none."""
+    b = getattr(case.branch, "band_hz", None)
+    if b is not None and len(b) == 2 and np.all(np.isfinite(b)) and b[1] > b[0]:
+        return min(float(b[0]), lo), max(float(b[1]), hi)
+    return lo, hi
+
+
+def _uncovered(x0: np.ndarray, x1: np.ndarray, lo: float, hi: float) -> list[tuple[float, float]]:
+    """Parts of [lo, hi] covered by no cell [x0, x1] (frequencies with no computed point)."""
+    order = np.argsort(x0)
+    gaps, reach = [], lo
+    for a, b in zip(x0[order], x1[order], strict=True):
+        if a > reach:
+            gaps.append((reach, float(a)))
+        reach = max(reach, float(b))
+    if reach < hi:
+        gaps.append((reach, hi))
+    span = hi - lo
+    return [(a, b) for a, b in gaps if b - a > 1e-9 * span]
+
+
+def status_zoom(case: CaseResult) -> tuple[float, float] | None:
+    """A frequency window (Hz) around the part of the branch where some pair slips or opens.
+
+    Widened by a quarter of its width on each side (at least 0.5 % of the
+    peak frequency); None when the branch has no point.
+    """
+    st = np.asarray(case.branch.status)
+    f = case.freq_hz
+    if st.ndim != 2 or st.shape[0] == 0:
+        return None
+    active = (st != 0).any(axis=1)
+    i = case.peak_index
+    if active.any():
+        a, b = float(f[active].min()), float(f[active].max())
+    else:
+        a = b = float(f[i])
+    pad = max(0.25 * (b - a), 0.005 * float(f[i]))
+    return a - pad, b + pad
 
 
 def _status_panel(ax, case: CaseResult, side_labels: bool = True) -> None:
@@ -421,7 +486,11 @@ def _status_panel(ax, case: CaseResult, side_labels: bool = True) -> None:
     colors = np.asarray(STATUS_COLORS)[np.clip(st.reshape(-1).astype(int), 0, 3)]
     ax.add_collection(PolyCollection(verts, facecolors=colors, edgecolors="none",
                                      antialiased=False, rasterized=True))
-    ax.set_xlim(float(x0.min()), float(x1.max()))
+    lo, hi = _band(case, float(x0.min()), float(x1.max()))
+    for g0, g1 in _uncovered(x0, x1, lo, hi):  # no computed point there: say so
+        ax.axvspan(g0, g1, facecolor=NOT_COMPUTED_COLOR, edgecolor=NOT_COMPUTED_EDGE,
+                   hatch="////", lw=0.0, zorder=0.5)
+    ax.set_xlim(lo, hi)
     ax.set_ylim(0.5, n_pairs + 0.5)
     side = np.asarray(case.side)
     n0 = int(np.sum(side == 0))
@@ -438,6 +507,7 @@ def _status_panel(ax, case: CaseResult, side_labels: bool = True) -> None:
     ax.grid(False)
 
 
+@styled
 def plot_status_map(cases: Sequence[CaseResult], path: str | Path, *,
                     title: str | None = None) -> Path:
     """Contact status of every pair vs frequency for one damper and family (paper Fig. 12).
@@ -449,28 +519,48 @@ def plot_status_map(cases: Sequence[CaseResult], path: str | Path, *,
     cases = _one_set(cases, "cases")
     plt = pyplot()
     n = len(cases)
-    fig, axes = plt.subplots(1, n, figsize=(3.9 * n + 0.6, 4.6), sharey=True,
-                             layout="constrained", squeeze=False)
-    for k, (ax, c) in enumerate(zip(axes[0], cases, strict=True)):
-        _status_panel(ax, c, side_labels=k == n - 1)
+    windows = [status_zoom(c) for c in cases]
+    spans = [float(np.ptp(c.freq_hz)) if c.branch.n_points else 0.0 for c in cases]
+    zoom = all(w is not None and s > 0 and (w[1] - w[0]) < ZOOM_MAX_SHARE * s
+               for w, s in zip(windows, spans, strict=True))
+    rows = 2 if zoom else 1
+    fig, axes = plt.subplots(rows, n, figsize=(3.9 * n + 0.6, 4.6 if rows == 1 else 7.6),
+                             sharey=True, layout="constrained", squeeze=False,
+                             height_ratios=[1, 1.25] if zoom else None)
+    for k, c in enumerate(cases):
+        for row in range(rows):
+            ax = axes[row, k]
+            _status_panel(ax, c, side_labels=k == n - 1)
+            ax.set_xlabel("frequency (Hz)")
         i = c.peak_index
         head = f"F = {c.force_n:g} N" + (f", peak at {c.freq_hz[i]:.1f} Hz" if i >= 0 else "")
         if c.branch.failed:
             head += f"\nbranch failed at {c.freq_hz[-1]:.1f} Hz" if c.branch.n_points else \
                 "\nbranch failed"
-        ax.set_title(head, fontsize=10)
-        ax.set_xlabel("frequency (Hz)")
-    axes[0, 0].set_ylabel("contact pair number")
+        axes[0, k].set_title(head, fontsize=10)
+        if zoom:
+            w0, w1 = windows[k]
+            axes[1, k].set_xlim(w0, w1)
+            axes[1, k].set_title(f"zoom: {w0:.1f}-{w1:.1f} Hz, where pairs slip or open",
+                                 fontsize=9)
+            axes[0, k].axvspan(w0, w1, facecolor="none", edgecolor="#c0392b", lw=1.0,
+                               ls="--", zorder=3)
+    for row in range(rows):
+        axes[row, 0].set_ylabel("contact pair number")
     from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
-    extra = [Line2D([], [], color="#c0392b", ls=":", lw=1.4, label="resonance peak")]
-    fig.legend(handles=status_legend_handles() + extra, loc="outside lower center", ncol=5,
+    extra = [Patch(facecolor=NOT_COMPUTED_COLOR, edgecolor=NOT_COMPUTED_EDGE, hatch="////",
+                   label="not computed (no point)"),
+             Line2D([], [], color="#c0392b", ls=":", lw=1.4, label="resonance peak")]
+    fig.legend(handles=status_legend_handles() + extra, loc="outside lower center", ncol=6,
                frameon=False)
     c0 = cases[0]
     fig.suptitle(title or f"{c0.damper} damper, {c0.family}: contact status of every pair")
     return save_figure(fig, path)
 
 
+@styled
 def plot_status_shares(cases: Sequence[CaseResult], path: str | Path, *,
                        title: str | None = None) -> Path:
     """Share of the pairs in each status at resonance vs force (paper Fig. 13).
@@ -540,6 +630,7 @@ def _axis_label(option: str) -> str:
     return f"{name}, {option} ({unit})"
 
 
+@styled
 def plot_sweep(cases: Sequence[CaseResult], option: str, path: str | Path, *,
                title: str | None = None) -> Path:
     """Peak amplitude (top) and resonance frequency (bottom) vs the swept option.
@@ -599,6 +690,7 @@ def plot_sweep(cases: Sequence[CaseResult], option: str, path: str | Path, *,
     return save_figure(fig, path)
 
 
+@styled
 def plot_cone_angle_energy(cases: Sequence[CaseResult], path: str | Path, *, beta_deg: float,
                            r1_mm: float, length_mm: float, option: str = "cone-angle",
                            title: str | None = None) -> Path:

@@ -477,7 +477,8 @@ def time_checks(cache_dir: Path | None, *, force: bool = False,
     from .plan import _SOLVER_CODE
 
     out = []
-    for name in progress(names or list(TIME_MODELS), "robustness: HBM vs time integration"):
+    for name in progress(names or list(TIME_MODELS), "robustness: HBM vs time integration",
+                         unit="model"):
         tm = TIME_MODELS[name]
         key = digest({"time-check": name, "level": tm.level, "harmonics": tm.harmonics,
                       "why": tm.why, "max_periods": tm.max_periods, "tol": tm.tol,

@@ -7,6 +7,7 @@ Folder layout of a study (``out``)::
     out/cache/cases/<digest>.h5             one finished case (atomic; the resume unit)
     out/results.h5                          every case of this study, in plan order
     out/cases/<case>.csv                    each curve as CSV
+    out/cases/<case>_peak.vtu               contact pairs at the peak (ParaView; post/vtk_out.py)
     out/summary.csv, summary.json           one row per case
     out/figures/, out/tables/               pictures and tables
     out/manifest.json, out/report.html      the report
@@ -206,8 +207,7 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         log.info("%d of %d cases to compute (%d cached)%s", len(todo), len(cases),
                  len(cases) - len(todo), f", {len(mine)} on rank {rank}" if size > 1 else "")
     t_cases = time.perf_counter()
-    total = sum(_cost(c, prepared) for c in mine)
-    with progress_bar(f"{spec.name}: cases", total=round(total, 3), unit="cost") as bar:
+    with progress_bar(f"{spec.name}: cases", total=len(mine), unit="case") as bar:
         for k, c in enumerate(mine):
             bar.set_postfix_str(f"{k + 1}/{len(mine)} {c.name}")
             res = solve_case(prepared[c.model_digest], c)
@@ -216,7 +216,7 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
                 failures.append(f"{c.name}: {res.branch.message}")
                 log.warning("case %s stopped early: %s (its %d points are kept)", c.name,
                             res.branch.message, res.branch.n_points)
-            bar.update(_cost(c, prepared))
+            bar.update(1)
             if not bars_enabled():
                 log.info("case %d/%d done: %s (%d points, %.1f s)", k + 1, len(mine), c.name,
                          res.branch.n_points, res.timings["hbm"])
@@ -329,6 +329,9 @@ def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
     results.save(out / "results.h5")
     for c in results.cases:
         c.branch.to_csv(out / "cases" / f"{c.case_id}.csv", unit_scale=1e3, unit="mm")
+    from ..post.vtk_out import write_study_peaks
+
+    write_study_peaks(results, out, prepared, {c.digest: c.model_digest for c in plan(spec)})
     rows = results.summaries()
     write_json(out / "summary.json", rows)
     if results.extras.get("screen"):
@@ -342,6 +345,7 @@ def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
 def write_manifest_and_report(out: Path, spec: StudySpec, subtitle: str, summary: list[str],
                               timings: dict[str, float], sections: list[dict]) -> None:
     """``manifest.json`` (see render/report.py for its layout) and ``report.html``."""
+    from ..post.inputs import used_inputs
     from ..render.report import write_report
     from ..versions import software_versions
 
@@ -350,6 +354,7 @@ def write_manifest_and_report(out: Path, spec: StudySpec, subtitle: str, summary
         "created": time.strftime("%Y-%m-%d %H:%M:%S"),
         "summary": summary,
         "inputs": spec.as_dict(), "sources": spec.source,
+        "inputs_used": used_inputs(spec.as_dict(), spec.source),
         "versions": software_versions(), "timings": timings,
         "sections": sections,
     }
@@ -381,10 +386,12 @@ def headline(results: StudyResults) -> list[str]:
             ok = [c for c in cs if c.peak_index >= 0]
             if not ok:
                 continue
-            top = max(ok, key=lambda c: c.force_n)
+            top = max(ok, key=lambda c: (c.force_n, -c.summary()["peak_amplitude_mm"]))
             s = top.summary()
+            # a sweep has several cases per damper and force: name the one quoted
+            which = f" ({top.variant.replace('=', ' = ')})" if top.variant else ""
             lines.append(
-                f"{d}, {top.family}: at {top.force_n:g} N the peak is "
+                f"{d}, {top.family}{which}: at {top.force_n:g} N the peak is "
                 f"{s['peak_amplitude_mm']:.4g} mm at {s['peak_frequency_hz']:.2f} Hz, "
                 f"friction energy {s['friction_energy_mj']:.3g} mJ per cycle")
     return lines

@@ -1,0 +1,55 @@
+"""results.h5 and reduced-model files: a unit on every numeric dataset (docs/RESULTS.md)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from tests.synthetic import synthetic_study
+from workbench.reduced import ReducedModel
+
+DOC = Path(__file__).resolve().parents[1] / "docs" / "RESULTS.md"
+
+
+def _datasets(h):
+    out = {}
+    h.visititems(lambda n, o: out.setdefault(n, o) if isinstance(o, h5py.Dataset) else None)
+    return out
+
+
+def test_every_results_dataset_has_a_documented_unit(tmp_path):
+    study = synthetic_study()
+    p = study.save(tmp_path / "results.h5")
+    doc = DOC.read_text()
+    with h5py.File(p, "r") as h:
+        ds = _datasets(h)
+        assert ds
+        for name, d in ds.items():
+            assert "unit" in d.attrs, name
+            leaf = name.split("/", 2)[2]  # cases/<case id>/<leaf>
+            assert f"`{leaf}`" in doc, f"{leaf} is not in docs/RESULTS.md"
+        cid = study.cases[0].case_id
+        assert h[f"cases/{cid}/friction_energy"].attrs["unit"] == "J"
+        assert h[f"cases/{cid}/freq_hz"].attrs["unit"] == "Hz"
+        assert h[f"cases/{cid}/case/points"].attrs["unit"] == "m"
+    # the attributes do not change what is read back
+    again = type(study).load(p)
+    np.testing.assert_array_equal(again.cases[0].energy_mj, study.cases[0].energy_mj)
+
+
+def test_reduced_model_units(tmp_path):
+    rm = ReducedModel(name="rig", kind="user", K=np.eye(3) * 1e4, M=np.eye(3), T=np.eye(3),
+                      node_coords=np.zeros((1, 3)), node_sets={"contact": np.array([0])})
+    p = rm.save(tmp_path / "rig.h5")
+    doc = DOC.read_text()
+    with h5py.File(p, "r") as h:
+        for name, d in _datasets(h).items():
+            if name.startswith("node_sets/"):
+                continue  # index arrays
+            assert "unit" in d.attrs, name
+            assert re.search(rf"`{name}`", doc), name
+        assert h["K"].attrs["unit"] == "N/m" and h["M"].attrs["unit"] == "kg"
+    np.testing.assert_array_equal(ReducedModel.load(p).K, rm.K)
