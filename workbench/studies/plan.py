@@ -82,16 +82,15 @@ def input_files_digest(damper: str, geometry: Any) -> str:
 
 @functools.lru_cache(maxsize=64)
 def _files_digest(paths: tuple[str, ...]) -> str:
-    import hashlib
+    from ..config import read_toml
 
-    h = hashlib.sha256()
-    for p in paths:
-        h.update(p.encode())
+    parts = []
+    for p in paths:  # the parsed values: editing a comment recomputes nothing
         try:
-            h.update(Path(p).read_bytes())
-        except OSError:
-            h.update(b"<missing>")
-    return h.hexdigest()[:16]
+            parts.append([p, read_toml(p)])
+        except Exception:  # noqa: BLE001 - a missing or bad file fails later, where it is read
+            parts.append([p, None])
+    return digest(parts, 16)
 
 
 def make_case(damper: str, phase: float, force: float, settings: dict[str, Any],
