@@ -1,7 +1,10 @@
 """The result of a frequency response: a branch of periodic solutions, saved to HDF5.
 
 Per point ``i`` (in continuation order, so a curve that turns back keeps
-its order): ``freq_hz[i]``; ``stable[i]`` (Hill); ``newton_its[i]``;
+its order): ``freq_hz[i]``; ``stability[i]`` (Hill's verdict: 1 stable,
+0 unstable, -1 unknown: not computed, eigen-solver failure or a failed
+count check) and ``stable[i]`` (True only for a stable verdict; use
+:attr:`Branch.unstable` / :attr:`Branch.unknown` for the others); ``newton_its[i]``;
 ``energy_residual[i]`` (relative, work of the excitation against viscous +
 contact work per cycle); ``out_amp[i, j]`` the largest ``|y_j(t)|`` over
 the period and ``out_h1[i, j]`` the harmonic-1 amplitude of output ``j``
@@ -26,6 +29,7 @@ from ..io import atomic_path
 _ARRAYS = (
     "freq_hz",
     "stable",
+    "stability",
     "newton_its",
     "energy_residual",
     "out_amp",
@@ -54,6 +58,7 @@ class Branch:
     space: str = "condensed"
     freq_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
     stable: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    stability: np.ndarray | None = None  # int8: 1 stable, 0 unstable, -1 unknown
     newton_its: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     energy_residual: np.ndarray = field(default_factory=lambda: np.zeros(0))
     out_amp: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
@@ -75,6 +80,27 @@ class Branch:
     options: dict[str, Any] = field(default_factory=dict)
     label: str = ""
 
+    def __post_init__(self) -> None:
+        self.stable = np.asarray(self.stable, dtype=bool)
+        if self.stability is None or np.size(self.stability) != self.stable.size:
+            # a record without verdicts (older files): stable or unstable as stored
+            self.stability = self.stable.astype(np.int8)
+        self.stability = np.asarray(self.stability, dtype=np.int8)
+
+    @property
+    def unstable(self) -> np.ndarray:
+        """(n_points,) bool: Hill found an exponent with a positive real part."""
+        return self.stability == 0
+
+    @property
+    def unknown(self) -> np.ndarray:
+        """(n_points,) bool: stability not determined (off, solver failure, count check)."""
+        return self.stability < 0
+
+    def stability_name(self, i: int) -> str:
+        """"stable", "unstable" or "unknown" at point ``i``."""
+        return ("unknown", "unstable", "stable")[int(self.stability[i]) + 1]
+
     @property
     def n_points(self) -> int:
         return int(self.freq_hz.size)
@@ -94,8 +120,10 @@ class Branch:
             peak_amplitude=float(self.out_amp[i, output]) if i >= 0 else None,
             h1_amplitude=float(self.out_h1[i, output]) if i >= 0 else None,
             peak_stable=bool(self.stable[i]) if i >= 0 else None,
+            peak_stability=self.stability_name(i) if i >= 0 else None,
             n_points=self.n_points,
-            n_unstable=int(np.sum(~self.stable)),
+            n_unstable=int(np.sum(self.unstable)),
+            n_stability_unknown=int(np.sum(self.unknown)),
             wall_s=round(float(self.timings.get("total", 0.0)), 4),
             energy_residual_max=float(np.max(self.energy_residual)) if self.n_points else None,
             newton_its=int(np.sum(self.newton_its)),
@@ -133,7 +161,7 @@ class Branch:
 
         with h5py.File(path, "r") as h:
             a = h.attrs
-            kw: dict[str, Any] = {name: h[name][()] for name in _ARRAYS}
+            kw: dict[str, Any] = {name: h[name][()] for name in _ARRAYS if name in h}
             kw["stable"] = kw["stable"].astype(bool)
             return cls(
                 level=float(a["level"]),
@@ -156,7 +184,7 @@ class Branch:
         """One row per point: frequency, stability, per-output amplitudes, energies."""
         from ..io import write_text
 
-        cols = ["freq_hz", "stable", "newton_its", "energy_residual"]
+        cols = ["freq_hz", "stable", "stability", "newton_its", "energy_residual"]
         for nm in self.output_names:
             cols += [f"{nm}_amp_{unit}", f"{nm}_h1_{unit}"]
         cols += [
@@ -173,6 +201,7 @@ class Branch:
             row = [
                 f"{self.freq_hz[i]:.9g}",
                 str(int(self.stable[i])),
+                self.stability_name(i),
                 str(int(self.newton_its[i])),
                 f"{self.energy_residual[i]:.3e}",
             ]

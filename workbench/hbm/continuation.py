@@ -33,7 +33,8 @@ from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
 from .fourier import Fourier
 from .options import SolverOptions
-from .stability import Stability, hill_arpack, hill_dense
+from .stability import UNKNOWN, Stability, hill_arpack, hill_dense
+from .stability import unknown as stability_unknown
 from .system import System
 
 log = logging.getLogger(__name__)
@@ -73,6 +74,7 @@ class _Recorder:
             else:
                 out[k] = np.zeros(shapes.get(k, (0,)))
         out["stable"] = out["stable"].astype(bool)
+        out["stability"] = out["stability"].astype(np.int8)
         out["status"] = out["status"].astype(np.int8)
         out["newton_its"] = out["newton_its"].astype(int)
         return out
@@ -155,15 +157,17 @@ def frequency_response(
                 "singular state); lower the excitation or raise the preload",
                 failed=True,
             )
-        mr, stable = np.nan, True
         if opts.stability:
             t0 = time.perf_counter()
-            st = _stability(hb, corr, x, w, opts)
+            st = _stability(hb, corr, x, w, opts, state.get("hill_v0"))
+            state["hill_v0"] = st.start
             timings["stability"] += time.perf_counter() - t0
-            mr, stable = st.max_real, st.stable
+        else:
+            st = stability_unknown("stability off")
         rec.add(
             freq_hz=w / TWO_PI,
-            stable=stable,
+            stable=st.stable,
+            stability=st.verdict,
             newton_its=its,
             energy_residual=pd.energy_residual,
             out_amp=pd.out_amp,
@@ -176,7 +180,7 @@ def frequency_response(
             work_visc=pd.work_visc,
             work_friction=pd.work_friction,
             work_normal=pd.work_normal,
-            max_floquet_real=mr,
+            max_floquet_real=st.max_real,
         )
         xd = x / u_ref
         if fourier.has_dc:
@@ -360,26 +364,39 @@ def _refine_peak(
         rec.rows[key].insert(pos, rec.rows[key].pop())
 
 
-def _stability(hb: HarmonicBalance, corr: Corrector, x: np.ndarray, w: float, opts: SolverOptions):
+def _stability(
+    hb: HarmonicBalance,
+    corr: Corrector,
+    x: np.ndarray,
+    w: float,
+    opts: SolverOptions,
+    v0: np.ndarray | None = None,
+) -> Stability:
+    """Hill's verdict at the solution ``x``, ``w`` (rad/s); ``v0`` the previous ARPACK vector."""
     size = 2 * hb.lin.n_z * hb.fourier.nh
     hb.residual(x, w)
     if size <= opts.hill_dense_limit:
         d0, d1, d2 = hb.hill_dense(w)
-        return hill_dense(d0, d1, d2, w, opts.unstable_tol)
+        return hill_dense(d0, d1, d2, w, hb.fourier.harmonics, opts.unstable_tol)
     lu = corr.factor(x / corr.u_ref, w / corr.w_ref)
     refine = 1 if lu.dtype == np.float32 else 0
     size, op = hb.hill_shift_invert(w, lambda b: lu.solve(b, refine=refine))
     try:
         st = hill_arpack(
-            size, op, w, opts.n_floquet, opts.unstable_tol, v0=getattr(hb, "_hill_v0", None)
+            size,
+            op,
+            w,
+            hb.fourier.harmonics,
+            opts.n_floquet,
+            opts.unstable_tol,
+            v0=v0,
+            n_max=opts.n_floquet_max,
         )
     except Exception as e:  # noqa: BLE001 - ARPACK breakdown: say so, keep the point
         log.warning("Hill's method failed at %.6g Hz (%s): stability unknown", w / TWO_PI, e)
-        corr.stats["n_stability_failed"] = corr.stats.get("n_stability_failed", 0) + 1
-        return Stability(np.zeros(0, complex), float("nan"), True, "arpack", converged=False)
-    if not st.converged:
-        corr.stats["n_stability_failed"] = corr.stats.get("n_stability_failed", 0) + 1
-    hb._hill_v0 = st.start
+        st = stability_unknown(f"ARPACK failed: {e}", "arpack")
+    if st.verdict == UNKNOWN:
+        corr.stats["n_stability_unknown"] = corr.stats.get("n_stability_unknown", 0) + 1
     return st
 
 

@@ -88,7 +88,15 @@ class SolverOptions:
     peak_iterations: int = param(8, "golden-section iterations of the peak search", lo=1, hi=60)
     # stability
     stability: bool = param(True, "Hill's method at every point")
-    n_floquet: int = param(6, "Floquet exponents computed by ARPACK (large systems)", lo=1, hi=200)
+    n_floquet: int = param(
+        6, "Floquet exponents ARPACK starts with (large systems)", lo=1, hi=200
+    )
+    n_floquet_max: int = param(
+        48,
+        "Floquet exponents ARPACK may grow to while covering |lambda| <= w/2 (else unknown)",
+        lo=1,
+        hi=2000,
+    )
     hill_dense_limit: int = param(
         700, "Hill state size up to which all exponents are computed", lo=0
     )

@@ -1,10 +1,11 @@
 """Frequency response curves of the harmonic balance (matplotlib, Agg).
 
 :func:`plot_frf` draws one curve per excitation level (stable parts solid,
-unstable parts dashed, the peak marked); :func:`plot_status_map` draws the
-contact status of every element along a branch (frequency on x, element on
-y), in the manner of the contact-status charts of "On the efficiency of a
-conical under-platform damper for turbines". Both take branches
+unstable parts dashed, parts of unknown stability dotted grey, the peak
+marked); :func:`plot_status_map` draws the contact status of every element
+along a branch (frequency on x, element on y), in the manner of the
+contact-status charts of "On the efficiency of a conical under-platform
+damper for turbines". Both take branches
 (:class:`workbench.hbm.Branch`) and write a PNG.
 """
 
@@ -22,7 +23,7 @@ STATUS_LABELS = ("stuck", "stick-slip", "partial separation", "full separation")
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(start, stop) index ranges of equal values in a boolean array (stop inclusive + 1)."""
+    """(start, stop) index ranges of equal values in an array (stop exclusive)."""
     if mask.size == 0:
         return []
     edges = np.flatnonzero(np.diff(mask.astype(int))) + 1
@@ -56,14 +57,16 @@ def plot_frf(
         a = b.out_amp[:, output] * unit_scale / (b.level if per_level and b.level else 1.0)
         label = f"level {b.level:g}" + (" (failed)" if b.failed else "")
         first = True
-        for s, e in _runs(b.stable):
+        verdict = np.asarray(b.stability)
+        for s, e in _runs(verdict):
             seg = slice(max(s - 1, 0), e)  # join the segments
+            v = int(verdict[s])
             ax.plot(
                 f[seg],
                 a[seg],
-                "-" if b.stable[s] else "--",
-                color=col,
-                lw=1.4,
+                {1: "-", 0: "--"}.get(v, ":"),
+                color=col if v >= 0 else "0.55",
+                lw=1.4 if v >= 0 else 1.8,
                 label=label if first else None,
             )
             first = False
@@ -75,7 +78,9 @@ def plot_frf(
     ylab = f"{name} amplitude / level ({unit}/N)" if per_level else f"{name} amplitude ({unit})"
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(ylab)
-    ax.set_title(title or "frequency response (solid: stable, dashed: unstable)")
+    ax.set_title(
+        title or "frequency response (solid: stable, dashed: unstable, dotted grey: unknown)"
+    )
     if any(b.n_points for b in branches):
         ax.legend(loc="best")
     return save_figure(fig, path)
