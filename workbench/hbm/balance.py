@@ -168,7 +168,9 @@ class HarmonicBalance:
         self.N = fourier.nh * self.n_s
         self.set_level(level)
         self._state_key: tuple | None = None
-        self.stats = dict(n_residual=0, t_residual=0.0, n_jacobian=0, t_jacobian=0.0)
+        self.stats = dict(
+            n_residual=0, t_residual=0.0, n_jacobian=0, t_jacobian=0.0, aft_periods_max=0
+        )
 
     # -- forcing ---------------------------------------------------------------
     def set_level(self, level: float) -> None:
@@ -214,6 +216,9 @@ class HarmonicBalance:
         U = self.to_u(X)
         if self.n_el:
             res = aft(U.reshape(f.nh, self.n_el, 3), self.el, f)
+            self.stats["aft_periods_max"] = max(
+                self.stats["aft_periods_max"], int(res.periods.max(initial=0))
+            )
             Uloc = U.reshape(f.nh, self.n_el, 3)
             G = res.F - self.kc[None] * Uloc
             D = res.J.copy()
