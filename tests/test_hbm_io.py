@@ -37,7 +37,8 @@ def test_branch_round_trip(tmp_path):
     assert c.output_names == ("x", "z") and c.label == "two dof" and c.completed
     assert c.summary()["peak_frequency_hz"] == b.summary()["peak_frequency_hz"]
     csv = b.to_csv(tmp_path / "b.csv", unit_scale=1e3, unit="mm").read_text().splitlines()
-    assert csv[0].startswith("freq_hz,stable,stability,newton_its,energy_residual,x_amp_mm")
+    head = "freq_hz,stable,stability,newton_its,energy_residual,accuracy,x_amp_mm"
+    assert csv[0].startswith(head)
     words = {line.split(",")[2] for line in csv[1:]}
     assert words <= {"stable", "unstable", "unknown"} and words
     assert len(csv) == b.n_points + 1

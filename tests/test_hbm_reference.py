@@ -185,3 +185,33 @@ def test_two_axis_law_against_time_integration(law):
     assert pd.status[0] == 1
     tr = time_response(s, f1, 1.2, fq, [0, 1], steps_per_period=1024, tol=1e-8)
     np.testing.assert_allclose(pd.out_amp, tr.amplitude, rtol=1e-2)
+
+
+def test_accuracy_indicator_fails_when_the_sampling_is_coarse():
+    """The energy balance closes at any converged point (it cannot fail), while the
+    loop-energy vs harmonic-work mismatch falls as O(1/nt^2) with the samples per period:
+    from several per cent at nt = 8 to ~1e-4 at nt = 256; a branch at nt = 8 says so."""
+    from workbench.contact import ContactElements
+    from workbench.hbm import System
+
+    el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
+    s = System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
+    w = 1.8
+    acc, resid = {}, {}
+    for nt in (8, 64, 256):
+        harm = (0, 1, 2, 3) if nt == 8 else tuple(range(8))
+        hb = HarmonicBalance(s, np.array([1.0 + 0j]), Fourier(harm, nt), [0], 1.0)
+        res = Corrector(hb, SolverOptions(), 1e-2, w).solve_natural(hb.stuck_solution(w), w)
+        assert res.converged
+        pd = hb.point_data(res.x, w)
+        acc[nt], resid[nt] = pd.accuracy, pd.energy_residual
+    assert max(resid.values()) < 1e-8  # the old self-check: satisfied at every nt
+    assert acc[8] > 1e-2 and acc[256] < 3e-4
+    assert 8 < acc[64] / acc[256] < 32  # O(1/nt^2): 16 for four times the samples
+    b = frequency_response(
+        s, np.array([1.0 + 0j]), 1.0, (1.6 / TWO_PI, 2.0 / TWO_PI), [0],
+        harmonics=(0, 1, 2, 3), nt=8,
+    )  # fmt: skip
+    sm = b.summary()
+    assert sm["accuracy_max"] > 1e-2 and "raise nt" in sm["accuracy_warning"]
+    assert "nt = 8" in sm["accuracy_warning"]

@@ -6,9 +6,12 @@ its order): ``freq_hz[i]``; ``stability[i]`` (Hill's verdict: 1 stable,
 count check) and ``stable[i]`` (True only for a stable verdict; use
 :attr:`Branch.unstable` / :attr:`Branch.unknown` for the others); ``newton_its[i]``;
 ``energy_residual[i]`` (relative, work of the excitation against viscous +
-contact work per cycle); ``out_amp[i, j]`` the largest ``|y_j(t)|`` over
-the period and ``out_h1[i, j]`` the harmonic-1 amplitude of output ``j``
-(model length unit); ``out_harm[i]`` (nh, n_out) the output harmonics;
+contact work per cycle); ``accuracy[i]`` (the loop-energy vs harmonic-work
+mismatch, a fraction of the excitation work: it grows when ``nt`` or the
+harmonics do not resolve the contact loops, see :mod:`.balance`);
+``out_amp[i, j]`` the largest ``|y_j(t)|`` over the period and
+``out_h1[i, j]`` the harmonic-1 amplitude of output ``j`` (model length
+unit); ``out_harm[i]`` (nh, n_out) the output harmonics;
 ``status[i, e]`` (0 stuck, 1 stick-slip, 2 partial separation, 3 full
 separation); ``friction_energy[i, e]`` (J per cycle); ``x[i]`` the solved
 unknowns (m; the layout of :mod:`.balance`), from which
@@ -43,6 +46,7 @@ _ARRAYS = (
     "work_friction",
     "work_normal",
     "max_floquet_real",
+    "accuracy",
 )
 
 
@@ -72,6 +76,7 @@ class Branch:
     work_friction: np.ndarray = field(default_factory=lambda: np.zeros(0))
     work_normal: np.ndarray = field(default_factory=lambda: np.zeros(0))
     max_floquet_real: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    accuracy: np.ndarray | None = None  # loop-energy vs harmonic-work mismatch (-)
     completed: bool = False
     failed: bool = False
     message: str = ""
@@ -86,6 +91,9 @@ class Branch:
             # a record without verdicts (older files): stable or unstable as stored
             self.stability = self.stable.astype(np.int8)
         self.stability = np.asarray(self.stability, dtype=np.int8)
+        if self.accuracy is None or np.size(self.accuracy) != self.stable.size:
+            self.accuracy = np.full(self.stable.size, np.nan)  # not computed (older files)
+        self.accuracy = np.asarray(self.accuracy, dtype=float)
 
     @property
     def unstable(self) -> np.ndarray:
@@ -126,6 +134,8 @@ class Branch:
             n_stability_unknown=int(np.sum(self.unknown)),
             wall_s=round(float(self.timings.get("total", 0.0)), 4),
             energy_residual_max=float(np.max(self.energy_residual)) if self.n_points else None,
+            accuracy_max=_nanmax(self.accuracy),
+            accuracy_warning=self.stats.get("accuracy_warning") or None,
             newton_its=int(np.sum(self.newton_its)),
             completed=self.completed,
             failed=self.failed,
@@ -184,7 +194,7 @@ class Branch:
         """One row per point: frequency, stability, per-output amplitudes, energies."""
         from ..io import write_text
 
-        cols = ["freq_hz", "stable", "stability", "newton_its", "energy_residual"]
+        cols = ["freq_hz", "stable", "stability", "newton_its", "energy_residual", "accuracy"]
         for nm in self.output_names:
             cols += [f"{nm}_amp_{unit}", f"{nm}_h1_{unit}"]
         cols += [
@@ -204,6 +214,7 @@ class Branch:
                 self.stability_name(i),
                 str(int(self.newton_its[i])),
                 f"{self.energy_residual[i]:.3e}",
+                f"{self.accuracy[i]:.3e}",
             ]
             for j in range(len(self.output_names)):
                 row += [
@@ -223,6 +234,11 @@ class Branch:
             row += [str(int(c)) for c in counts[:4]]
             lines.append(",".join(row))
         return write_text(path, "\n".join(lines) + "\n")
+
+
+def _nanmax(a: np.ndarray) -> float | None:
+    a = np.asarray(a, dtype=float)
+    return float(np.nanmax(a)) if a.size and np.isfinite(a).any() else None
 
 
 def arc_length(

@@ -31,7 +31,7 @@ from ..errors import InputError, check_range
 from .balance import HarmonicBalance, observation
 from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
-from .fourier import Fourier
+from .fourier import Fourier, default_nt
 from .options import SolverOptions
 from .stability import UNKNOWN, Stability, hill_arpack, hill_dense
 from .stability import unknown as stability_unknown
@@ -170,6 +170,7 @@ def frequency_response(
             stability=st.verdict,
             newton_its=its,
             energy_residual=pd.energy_residual,
+            accuracy=pd.accuracy,
             out_amp=pd.out_amp,
             out_h1=pd.out_h1,
             out_harm=pd.out_harm,
@@ -245,6 +246,9 @@ def frequency_response(
     st["t_per_residual"] = st["t_residual"] / max(st["n_residual"], 1)
     st["t_per_jacobian"] = (st["t_jacobian"] + 0.0) / max(st["n_jacobian"], 1)
     st["t_per_factor"] = st["t_factor"] / max(st["n_factor"], 1)
+    st["accuracy_warning"] = _accuracy_warning(fourier, arrays, opts)
+    if st["accuracy_warning"]:
+        log.warning("%s%s", f"{label}: " if label else "", st["accuracy_warning"])
     from ..config import record_to_dict
 
     return Branch(
@@ -263,6 +267,26 @@ def frequency_response(
         label=label,
         **arrays,
     )
+
+
+def _accuracy_warning(fourier: Fourier, arrays: dict, opts: SolverOptions) -> str:
+    """The accuracy warning of a branch ("" if none): nt small, or the indicator too large."""
+    out = []
+    hmax = max(fourier.harmonics)
+    if fourier.nt < 8 * hmax:
+        out.append(
+            f"nt = {fourier.nt} samples per period is few for harmonics up to {hmax} "
+            f"(at least {8 * hmax}; the default is {default_nt(fourier.harmonics)})"
+        )
+    acc = np.asarray(arrays.get("accuracy", []), dtype=float)
+    if acc.size and np.nanmax(acc, initial=0.0) > opts.accuracy_tol:
+        i = int(np.nanargmax(acc))
+        out.append(
+            f"the loop energy and the harmonic work of the contacts differ by "
+            f"{acc[i]:.2g} of the excitation work at f = {arrays['freq_hz'][i]:.6g} Hz "
+            f"(accuracy_tol {opts.accuracy_tol:g}): raise nt (and the harmonics)"
+        )
+    return "; ".join(out)
 
 
 def _ramp_level(hb: HarmonicBalance, corr: Corrector, w: float, level: float):

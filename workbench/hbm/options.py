@@ -118,6 +118,13 @@ class SolverOptions:
         lo=0.0,
         hi=1.0,
     )
+    accuracy_tol: float = param(
+        1e-2,
+        "warn when the loop-energy vs harmonic-work mismatch exceeds this fraction of the "
+        "excitation work at some point (nt or harmonics too few for the contact loops)",
+        lo=0.0,
+        lo_open=True,
+    )
     n_fine: int = param(256, "samples per period for the peak of the output", lo=16)
 
     def __post_init__(self) -> None:

@@ -120,6 +120,8 @@ class CaseResult:
             "n_unstable": int(np.sum(self.branch.unstable)),
             "n_stability_unknown": int(np.sum(self.branch.unknown)),
             "energy_residual_max": float(np.max(self.branch.energy_residual)) if ok else None,
+            "accuracy_max": self.branch.summary(self.output)["accuracy_max"],
+            "peak_stability": self.branch.stability_name(i) if ok else None,
             "completed": bool(self.branch.completed),
             "message": self.branch.message,
             "wall_s": round(float(self.timings.get("hbm", self.branch.timings.get("total", 0.0))),
