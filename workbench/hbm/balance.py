@@ -109,6 +109,7 @@ class PointData:
     out_harm: np.ndarray  # (nh, n_out) output harmonics, m
     out_amp: np.ndarray  # (n_out,) max over the period of |y(t)|, m
     out_h1: np.ndarray  # (n_out,) harmonic-1 amplitude, m
+    out_rms: np.ndarray  # (n_out,) RMS of y(t) over the period, m
     status: np.ndarray  # (n_el,) int8
     friction_energy: np.ndarray  # (n_el,) J per cycle
     work_ext: float  # J per cycle
@@ -439,6 +440,7 @@ class HarmonicBalance:
         Y = self._rmul(self.Yz, self.Oz.T)
         out_amp = f.amplitude(Y, n_fine)
         out_h1 = f.h1_amplitude(Y)
+        out_rms = f.rms(Y)
         work_ext = float(np.sum(work_per_cycle(self.Pz, self.Yz, f)))
         work_visc = self.lin.viscous_work(omega, self.Yz)
         if self.n_el:
@@ -461,6 +463,7 @@ class HarmonicBalance:
             out_harm=Y,
             out_amp=out_amp,
             out_h1=out_h1,
+            out_rms=out_rms,
             status=status,
             friction_energy=fric,
             work_ext=work_ext,

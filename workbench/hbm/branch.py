@@ -37,6 +37,7 @@ _ARRAYS = (
     "energy_residual",
     "out_amp",
     "out_h1",
+    "out_rms",
     "out_harm",
     "status",
     "friction_energy",
@@ -67,6 +68,7 @@ class Branch:
     energy_residual: np.ndarray = field(default_factory=lambda: np.zeros(0))
     out_amp: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     out_h1: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    out_rms: np.ndarray | None = None  # (n_points, n_out) RMS over the period
     out_harm: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
     status: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.int8))
     friction_energy: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
@@ -91,6 +93,15 @@ class Branch:
             # a record without verdicts (older files): stable or unstable as stored
             self.stability = self.stable.astype(np.int8)
         self.stability = np.asarray(self.stability, dtype=np.int8)
+        if self.out_rms is None or np.shape(self.out_rms) != np.shape(self.out_amp):
+            # older files: from the stored output harmonics (Q0^2 + sum (Qc^2 + Qs^2) / 2)
+            w = np.concatenate([[1.0] if h == 0 else [0.5, 0.5] for h in self.harmonics])
+            oh = np.asarray(self.out_harm, dtype=float)
+            self.out_rms = (
+                np.sqrt(np.einsum("h,ihj->ij", w, oh**2))
+                if oh.ndim == 3 and oh.shape[1] == w.size
+                else np.zeros_like(np.asarray(self.out_amp, dtype=float))
+            )
         if self.accuracy is None or np.size(self.accuracy) != self.stable.size:
             self.accuracy = np.full(self.stable.size, np.nan)  # not computed (older files)
         self.accuracy = np.asarray(self.accuracy, dtype=float)
@@ -119,14 +130,39 @@ class Branch:
             return -1
         return int(np.argmax(self.out_amp[:, output]))
 
+    def _argmax(self, values: np.ndarray, output: int) -> int:
+        return int(np.argmax(values[:, output])) if self.n_points else -1
+
+    def peak_inside(self, i: int) -> bool:
+        """True if point ``i`` is a maximum inside the band, not a band end (a peak reached)."""
+        return 0 < i < self.n_points - 1
+
     def summary(self, output: int = 0) -> dict[str, Any]:
-        """The numbers the CLI prints for this curve (amplitudes in the model's length unit)."""
+        """The numbers the CLI prints for this curve (amplitudes in the model's length unit).
+
+        Three peaks, each at its own frequency: ``peak_*`` the largest
+        ``|y(t)|`` over the period, ``h1_*`` the largest harmonic-1 amplitude,
+        ``rms_*`` the largest RMS over the period; ``peak_reached`` (and
+        ``h1_peak_reached``) is False when that maximum lies at a band end (the
+        curve is still rising there: not a resonance peak).
+        """
         i = self.peak(output)
+        j = self._argmax(self.out_h1, output)
+        k = self._argmax(self.out_rms, output)
+
+        def at(arr, n):
+            return float(arr[n]) if n >= 0 else None
+
         return dict(
             level=self.level,
-            peak_frequency_hz=float(self.freq_hz[i]) if i >= 0 else None,
+            peak_frequency_hz=at(self.freq_hz, i),
             peak_amplitude=float(self.out_amp[i, output]) if i >= 0 else None,
-            h1_amplitude=float(self.out_h1[i, output]) if i >= 0 else None,
+            peak_reached=self.peak_inside(i) if i >= 0 else None,
+            h1_peak_frequency_hz=at(self.freq_hz, j),
+            h1_amplitude=float(self.out_h1[j, output]) if j >= 0 else None,
+            h1_peak_reached=self.peak_inside(j) if j >= 0 else None,
+            rms_peak_frequency_hz=at(self.freq_hz, k),
+            rms_amplitude=float(self.out_rms[k, output]) if k >= 0 else None,
             peak_stable=bool(self.stable[i]) if i >= 0 else None,
             peak_stability=self.stability_name(i) if i >= 0 else None,
             n_points=self.n_points,
@@ -196,7 +232,7 @@ class Branch:
 
         cols = ["freq_hz", "stable", "stability", "newton_its", "energy_residual", "accuracy"]
         for nm in self.output_names:
-            cols += [f"{nm}_amp_{unit}", f"{nm}_h1_{unit}"]
+            cols += [f"{nm}_amp_{unit}", f"{nm}_h1_{unit}", f"{nm}_rms_{unit}"]
         cols += [
             "friction_energy_j",
             "viscous_energy_j",
@@ -220,6 +256,7 @@ class Branch:
                 row += [
                     f"{self.out_amp[i, j] * unit_scale:.9g}",
                     f"{self.out_h1[i, j] * unit_scale:.9g}",
+                    f"{self.out_rms[i, j] * unit_scale:.9g}",
                 ]
             counts = (
                 np.bincount(self.status[i].astype(int), minlength=4)

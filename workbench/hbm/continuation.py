@@ -62,6 +62,7 @@ class _Recorder:
         shapes = dict(
             out_amp=(0, n_out),
             out_h1=(0, n_out),
+            out_rms=(0, n_out),
             out_harm=(0, nh, n_out),
             status=(0, n_el),
             friction_energy=(0, n_el),
@@ -173,6 +174,7 @@ def frequency_response(
             accuracy=pd.accuracy,
             out_amp=pd.out_amp,
             out_h1=pd.out_h1,
+            out_rms=pd.out_rms,
             out_harm=pd.out_harm,
             status=pd.status,
             friction_energy=pd.friction_energy,
@@ -226,7 +228,8 @@ def frequency_response(
     try:
         if opts.refine_peak and len(rec.rows["freq_hz"]) >= 3:
             t0 = time.perf_counter()
-            _refine_peak(hb, corr, opts, rec, record)
+            _refine_peak(hb, corr, opts, rec, record, "out_amp")
+            _refine_peak(hb, corr, opts, rec, record, "out_h1")
             timings["peak"] = time.perf_counter() - t0
     except _Stop as stop:  # a lost contact found while refining: report, keep the branch
         message = message or str(stop)
@@ -321,19 +324,27 @@ def _ramp_level(hb: HarmonicBalance, corr: Corrector, w: float, level: float):
 
 
 def _refine_peak(
-    hb: HarmonicBalance, corr: Corrector, opts: SolverOptions, rec: _Recorder, record
+    hb: HarmonicBalance,
+    corr: Corrector,
+    opts: SolverOptions,
+    rec: _Recorder,
+    record,
+    key: str = "out_amp",
 ) -> None:
-    """Search for the largest output amplitude around the largest computed one.
+    """Search for the largest ``key`` of output 0 around the largest computed one.
 
-    Where the branch is single-valued around the peak (frequency increasing
-    through the two neighbours on each side), the amplitude is sampled at
-    seven frequencies between the outer neighbours (friction makes the top
-    of the curve kinked, so it may have local maxima), then a golden-section
-    search refines around the best sample. Each trial is a corrector solve at
-    fixed frequency from the interpolated branch. The best trial is recorded
-    and inserted in frequency order.
+    ``key``: "out_amp" (the largest ``|y(t)|`` over the period) or "out_h1"
+    (the harmonic-1 amplitude): each has its own peak frequency. Where the
+    branch is single-valued around the peak (frequency increasing through
+    the two neighbours on each side), the value is sampled at seven
+    frequencies between the outer neighbours (friction makes the top of the
+    curve kinked, so it may have local maxima), then a golden-section search
+    refines around the best sample until the bracket is narrower than
+    ``peak_ftol`` (relative) or ``peak_iterations`` are spent. Each trial is a
+    corrector solve at fixed frequency from the interpolated branch. The
+    best trial is recorded and inserted in frequency order.
     """
-    amp = np.array([a[0] for a in rec.rows["out_amp"]])
+    amp = np.array([a[0] for a in rec.rows[key]])
     f = np.array(rec.rows["freq_hz"])
     i = int(np.argmax(amp))
     lo, hi = max(i - 2, 0), min(i + 2, len(f) - 1)
@@ -357,8 +368,8 @@ def _refine_peak(
             if not r.converged:
                 cache[fq] = (-np.inf, r.x, r.its)
             else:
-                a = float(hb.point_data(r.x, TWO_PI * fq, opts.n_fine).out_amp[0])
-                cache[fq] = (a, r.x, r.its)
+                pd = hb.point_data(r.x, TWO_PI * fq, opts.n_fine)
+                cache[fq] = (float(getattr(pd, key)[0]), r.x, r.its)
         return cache[fq][0]
 
     grid = np.linspace(f[lo], f[hi], 9)[1:-1]
@@ -372,6 +383,8 @@ def _refine_peak(
     g = (np.sqrt(5) - 1) / 2
     c, d = b - g * (b - a), a + g * (b - a)
     for _ in range(opts.peak_iterations):
+        if b - a <= opts.peak_ftol * 0.5 * (a + b):
+            break
         if value(c) > value(d):
             b, d = d, c
             c = b - g * (b - a)
@@ -384,8 +397,8 @@ def _refine_peak(
         return
     record(xb, TWO_PI * fq, its)
     pos = int(np.searchsorted(f[lo : hi + 1], fq)) + lo  # keep frequency order there
-    for key in rec.rows:
-        rec.rows[key].insert(pos, rec.rows[key].pop())
+    for name in rec.rows:
+        rec.rows[name].insert(pos, rec.rows[name].pop())
 
 
 def _stability(
@@ -550,8 +563,17 @@ def _arclength(
             theta = (w1 - w) / (res.omega - w)
             guess = x + theta * (res.x - x)
             end = corr.solve_natural(guess, w1)
-            if end.converged:
-                record(end.x, w1, end.its)
+            if not end.converged:  # once more with a fresh LU
+                corr.force_refresh = True
+                end = corr.solve_natural(guess, w1)
+            if not end.converged:
+                raise _Stop(
+                    f"the branch passed the band end but the corrector failed at exactly "
+                    f"f = {w1 / TWO_PI:.6g} Hz (SNES: {end.reason}); the last point kept is "
+                    f"at {w / TWO_PI:.6g} Hz",
+                    failed=True,
+                )
+            record(end.x, w1, end.its)
             return True
         if res.omega < w0 * (1 - 1e-12):
             raise _Stop(

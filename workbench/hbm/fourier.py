@@ -185,6 +185,15 @@ class Fourier:
         refined = np.abs(np.einsum("mh,hm->m", B, X))
         return np.maximum(refined, np.abs(x[j, np.arange(x.shape[1])]))
 
+    def rms(self, X: np.ndarray) -> np.ndarray:
+        """RMS over the period of each signal in X (nh, m).
+
+        ``sqrt(Q0^2 + sum_k (Qc_k^2 + Qs_k^2) / 2)`` (Parseval), same unit as X.
+        """
+        X = np.asarray(X, dtype=float)
+        w = np.where(self.kind == 0, 1.0, 0.5).reshape((-1,) + (1,) * (X.ndim - 1))
+        return np.sqrt(np.sum(w * X**2, axis=0))
+
     def h1_amplitude(self, X: np.ndarray) -> np.ndarray:
         """``sqrt(Qc_1^2 + Qs_1^2)`` of each signal (0 if harmonic 1 is not in the list)."""
         if 1 not in self.harmonics:

@@ -84,8 +84,21 @@ class SolverOptions:
         lo_open=True,
     )
     max_points: int = param(3000, "points per curve before stopping", lo=2)
-    refine_peak: bool = param(True, "golden-section search for the peak between its neighbours")
-    peak_iterations: int = param(8, "golden-section iterations of the peak search", lo=1, hi=60)
+    refine_peak: bool = param(
+        True,
+        "golden-section search of the max |y(t)| peak and of the harmonic-1 peak, each at its "
+        "own frequency",
+    )
+    peak_iterations: int = param(
+        30, "largest number of golden-section iterations of each peak search", lo=1, hi=100
+    )
+    peak_ftol: float = param(
+        1e-5,
+        "each peak search stops when its frequency bracket is narrower than this (relative)",
+        lo=0.0,
+        lo_open=True,
+        hi=0.1,
+    )
     # stability
     stability: bool = param(True, "Hill's method at every point")
     n_floquet: int = param(
