@@ -37,8 +37,8 @@ def test_linear_floquet_exponents_are_the_damped_poles():
     f = Fourier((0, 1, 2, 3), 64)
     hb = HarmonicBalance(s, ex.f1, f, [0], 1.0)
     w = TWO_PI * 120.0
-    hb.residual(hb.stuck_solution(w), w)
-    st = hill_dense(*hb.hill_dense(w), w, f.harmonics)
+    ev = hb.evaluate(hb.stuck_solution(w), w)
+    st = hill_dense(*hb.hill_dense(ev), w, f.harmonics)
     wn = np.sqrt((s.K[0, 0] + s.contacts.kt1[0]) / s.M[0, 0])
     z = s.zeta[0]
     wd = wn * np.sqrt(1 - z * z)
@@ -66,16 +66,16 @@ def test_arpack_shift_invert_matches_the_dense_hill_exponents(space):
     w = TWO_PI * 40.0
     res = Corrector(hb, SolverOptions(), 1e-4, w).solve_natural(hb.stuck_solution(w), w)
     assert res.converged
-    hb.residual(res.x, w)
-    assert set(hb.aft.status) & {1, 2}
-    dense = hill_dense(*hb.hill_dense(w), w, f.harmonics)
+    ev = hb.evaluate(res.x, w)
+    assert set(ev.aft.status) & {1, 2}
+    dense = hill_dense(*hb.hill_dense(ev), w, f.harmonics)
     assert dense.count_ok
-    lu = Factorization(hb, res.x, w, 1.0, 1.0, hb.residual_omega(res.x, w))
-    size, op = hb.hill_shift_invert(w, lu.solve)
+    lu = Factorization(hb, ev, hb.residual_omega(ev))
+    size, op = hb.hill_shift_invert(ev, lu.solve)
     assert size == 2 * n * f.nh
     arp = hill_arpack(size, op, w, f.harmonics, n_exp=6, n_max=400)
     assert arp.converged and arp.count_ok
-    every = hill_eig(*hb.hill_dense(w))[0]
+    every = hill_eig(*hb.hill_dense(ev))[0]
     # every exponent ARPACK keeps is an eigenvalue of the dense problem (to ARPACK's 1e-6)
     for lam in arp.exponents:
         assert np.min(np.abs(every - lam)) < 1e-6 * abs(w)
@@ -135,9 +135,10 @@ def test_time_integration_confirms_the_stability_verdicts(unilateral):
         j = idx[np.argmin(np.abs(b.freq_hz[idx] - fq))]
         res = corr.solve_natural(b.x[j], w)
         assert res.converged
-        Q = hb.response(res.x, w)
-        amp = hb.point_data(res.x, w).out_amp[0]
-        stable = hill_dense(*hb.hill_dense(w), w, f.harmonics).stable
+        ev = hb.evaluate(res.x, w)
+        Q = hb.response(ev)
+        amp = hb.point_data(ev).out_amp[0]
+        stable = hill_dense(*hb.hill_dense(ev), w, f.harmonics).stable
         assert stable == (name != "middle")
         q0, v0 = f.state_at(Q, w)
         tr = time_response(
@@ -220,7 +221,7 @@ def test_jenkins_time_integration_settles_on_the_hbm_orbit(jenkins_branch, omega
     j = int(np.argmin(np.abs(b.freq_hz * TWO_PI - omega)))
     res = corr.solve_natural(b.x[j], omega)
     assert res.converged
-    st = hill_dense(*hb.hill_dense(omega), omega, f.harmonics)
+    st = hill_dense(*hb.hill_dense(hb.evaluate(res.x, omega)), omega, f.harmonics)
     assert st.verdict == STABLE and st.count_ok
     amp = hb.point_data(res.x, omega).out_amp[0]
     tr = time_response(
@@ -238,9 +239,9 @@ def test_two_dof_separating_point_stays_unstable():
     hb = HarmonicBalance(ex.system, ex.f1, f, ex.outputs, 3.0)
     res = Corrector(hb, SolverOptions(), 1e-4, w).solve_natural(hb.stuck_solution(w), w)
     assert res.converged
-    hb.residual(res.x, w)
-    assert hb.aft.status[0] == 2
-    st = hill_dense(*hb.hill_dense(w), w, f.harmonics)
+    ev = hb.evaluate(res.x, w)
+    assert ev.aft.status[0] == 2
+    st = hill_dense(*hb.hill_dense(ev), w, f.harmonics)
     assert st.count_ok and st.verdict == UNSTABLE
     assert st.max_real > 0.01 * w
 

@@ -28,7 +28,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import InputError, check_range
-from .balance import HarmonicBalance, observation
+from .balance import Evaluation, HarmonicBalance, observation
 from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
 from .fourier import Fourier, default_nt
@@ -137,7 +137,8 @@ def frequency_response(
     band_s = (w1 - w0) / w0
     rec = _Recorder()
     timings = dict(setup=time.perf_counter() - t_start, stability=0.0, post=0.0)
-    state = dict(xi=1e-300, n=0)
+    # loop state: largest solution norm, points, Hill's ARPACK start vector and dense blocks
+    state = dict(xi=1e-300, n=0, hill_v0=None, parts=None)
     message, failed, completed = "", False, False
 
     from ..log import progress_bar
@@ -149,7 +150,8 @@ def frequency_response(
 
     def record(x: np.ndarray, w: float, its: int) -> None:
         t0 = time.perf_counter()
-        pd = hb.point_data(x, w, opts.n_fine)
+        ev = hb.evaluate(x, w)
+        pd = hb.point_data(ev, n_fine=opts.n_fine)
         timings["post"] += time.perf_counter() - t0
         if pd.lost_contact:
             raise _Stop(
@@ -160,7 +162,7 @@ def frequency_response(
             )
         if opts.stability:
             t0 = time.perf_counter()
-            st = _stability(hb, corr, x, w, opts, state.get("hill_v0"))
+            st = _stability(hb, corr, ev, opts, state["hill_v0"], state)
             state["hill_v0"] = st.start
             timings["stability"] += time.perf_counter() - t0
         else:
@@ -368,7 +370,7 @@ def _refine_peak(
             if not r.converged:
                 cache[fq] = (-np.inf, r.x, r.its)
             else:
-                pd = hb.point_data(r.x, TWO_PI * fq, opts.n_fine)
+                pd = hb.point_data(r.x, TWO_PI * fq, n_fine=opts.n_fine)
                 cache[fq] = (float(getattr(pd, key)[0]), r.x, r.its)
         return cache[fq][0]
 
@@ -404,20 +406,24 @@ def _refine_peak(
 def _stability(
     hb: HarmonicBalance,
     corr: Corrector,
-    x: np.ndarray,
-    w: float,
+    ev: Evaluation,
     opts: SolverOptions,
     v0: np.ndarray | None = None,
+    hill_parts: dict | None = None,
 ) -> Stability:
-    """Hill's verdict at the solution ``x``, ``w`` (rad/s); ``v0`` the previous ARPACK vector."""
+    """Hill's verdict at the evaluation ``ev`` of a solution; ``v0`` the previous ARPACK vector;
+    ``hill_parts`` a dict holding the branch's :class:`HillParts` (built on first use)."""
+    hill_parts = {} if hill_parts is None else hill_parts
+    x, w = ev.x, ev.omega
     size = 2 * hb.lin.n_z * hb.fourier.nh
-    hb.residual(x, w)
     if size <= opts.hill_dense_limit:
-        d0, d1, d2 = hb.hill_dense(w)
+        if hill_parts.get("parts") is None:
+            hill_parts["parts"] = hb.hill_parts()
+        d0, d1, d2 = hb.hill_dense(ev, hill_parts["parts"])
         return hill_dense(d0, d1, d2, w, hb.fourier.harmonics, opts.unstable_tol)
     lu = corr.factor(x / corr.u_ref, w / corr.w_ref)
     refine = 1 if lu.dtype == np.float32 else 0
-    size, op = hb.hill_shift_invert(w, lambda b: lu.solve(b, refine=refine))
+    size, op = hb.hill_shift_invert(lu.ev, lambda b: lu.solve(b, refine=refine))
     try:
         st = hill_arpack(
             size,

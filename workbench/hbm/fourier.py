@@ -48,6 +48,12 @@ class Fourier:
     kind: np.ndarray = field(init=False, repr=False)  # (nh,) 0 = Q0, 1 = cos, 2 = sin
     E: np.ndarray = field(init=False, repr=False)  # (nt, nh) synthesis
     P: np.ndarray = field(init=False, repr=False)  # (nh, nt) analysis
+    # each harmonic k >= 1: (k, cos index, sin index), and the same as index arrays
+    _pairs: tuple[tuple[int, int, int], ...] = field(init=False, repr=False)
+    ic: np.ndarray = field(init=False, repr=False)  # cos component of each pair
+    is_: np.ndarray = field(init=False, repr=False)  # sin component of each pair
+    pair_k: np.ndarray = field(init=False, repr=False)  # harmonic of each pair
+    pair_row: np.ndarray = field(init=False, repr=False)  # its position in ``harmonics``
 
     def __post_init__(self) -> None:
         try:
