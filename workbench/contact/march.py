@@ -92,12 +92,15 @@ def _march_py(
                 f[e, j, 1] = fj[1]
                 f[e, j, 2] = fj[2]
                 if want_jac:
+                    # the law's derivatives are sparse: only their non-zero entries are used
                     for a in range(3):
                         for c in range(m):
-                            acc = 0.0
-                            for k in range(ns):
-                                acc += Fs[a, k] * ds[k, c]
-                            dfb[a, j, c] = acc
+                            dfb[a, j, c] = 0.0
+                        for k in range(ns):
+                            fak = Fs[a, k]
+                            if fak != 0.0:
+                                for c in range(m):
+                                    dfb[a, j, c] += fak * ds[k, c]
                         for b in range(3):
                             fab = Fu[a, b]
                             if fab != 0.0:
@@ -105,16 +108,20 @@ def _march_py(
                                     dfb[a, j, b * nh + h] += fab * E[j, h]
                     for a in range(ns):
                         for c in range(m):
-                            acc = 0.0
-                            for k in range(ns):
-                                acc += Ss[a, k] * ds[k, c]
-                            ds_new[a, c] = acc
+                            ds_new[a, c] = 0.0
+                        for k in range(ns):
+                            sak = Ss[a, k]
+                            if sak != 0.0:
+                                for c in range(m):
+                                    ds_new[a, c] += sak * ds[k, c]
                         for b in range(3):
                             sab = Su[a, b]
                             if sab != 0.0:
                                 for h in range(nh):
                                     ds_new[a, b * nh + h] += sab * E[j, h]
-                    ds[:, :] = ds_new
+                    for a in range(ns):
+                        for c in range(m):
+                            ds[a, c] = ds_new[a, c]
                 for k in range(ns):
                     s[k] = s_new[k]
                     if abs(s[k]) > scale[k]:

@@ -138,7 +138,7 @@ def frequency_response(
     rec = _Recorder()
     timings = dict(setup=time.perf_counter() - t_start, stability=0.0, post=0.0)
     # loop state: largest solution norm, points, Hill's ARPACK start vector and dense blocks
-    state = dict(xi=1e-300, n=0, hill_v0=None, parts=None)
+    state = dict(xi=1e-300, n=0, hill_v0=None, parts=None, hill_k=None)
     message, failed, completed = "", False, False
 
     from ..log import progress_bar
@@ -430,7 +430,7 @@ def _stability(
             op,
             w,
             hb.fourier.harmonics,
-            opts.n_floquet,
+            max(opts.n_floquet, hill_parts.get("hill_k") or 0),
             opts.unstable_tol,
             v0=v0,
             n_max=opts.n_floquet_max,
@@ -438,6 +438,7 @@ def _stability(
     except Exception as e:  # noqa: BLE001 - ARPACK breakdown: say so, keep the point
         log.warning("Hill's method failed at %.6g Hz (%s): stability unknown", w / TWO_PI, e)
         st = stability_unknown(f"ARPACK failed: {e}", "arpack")
+    hill_parts["hill_k"] = st.n_exp
     if st.verdict == UNKNOWN:
         corr.stats["n_stability_unknown"] = corr.stats.get("n_stability_unknown", 0) + 1
     return st

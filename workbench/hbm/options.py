@@ -93,7 +93,7 @@ class SolverOptions:
         30, "largest number of golden-section iterations of each peak search", lo=1, hi=100
     )
     peak_ftol: float = param(
-        1e-5,
+        1e-4,
         "each peak search stops when its frequency bracket is narrower than this (relative)",
         lo=0.0,
         lo_open=True,

@@ -65,6 +65,7 @@ class Stability:
     count_ok: bool = True  # the centred-eigenvector count check passed
     note: str = ""  # why the verdict is unknown
     start: np.ndarray | None = None  # ARPACK start vector for the next point
+    n_exp: int = 0  # exponents ARPACK was asked for (the next point starts there)
 
     @property
     def stable(self) -> bool:
@@ -225,7 +226,8 @@ def hill_arpack(
 ) -> Stability:
     """Hill exponents nearest 0 through ARPACK on ``A^-1 B`` (``op``), covering ``|lambda| <= w/2``.
 
-    Starts with ``n_exp`` exponents and doubles the count (up to ``n_max``)
+    Starts with ``n_exp`` exponents (the previous point's final count, along a
+    branch) and doubles the count (up to ``n_max``)
     until the farthest one found lies beyond ``w / 2``, so that every
     exponent that can cross the imaginary axis (fold, Neimark-Sacker, period
     doubling) is among those found; keeps those with centred eigenvectors
@@ -284,4 +286,5 @@ def hill_arpack(
         converged=True,
         count_ok=covered,
         start=start,
+        n_exp=k,
     )

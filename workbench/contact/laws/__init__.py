@@ -62,7 +62,9 @@ LAWS: tuple[str, ...] = tuple(
 
 def get_law(name: str) -> Law:
     """The registered law ``name`` (InputError with the choices otherwise)."""
-    from ...errors import check_choice
+    law = REGISTRY.get(name)
+    if law is None:
+        from ...errors import check_choice
 
-    check_choice("law", name, LAWS)
-    return REGISTRY[name]
+        check_choice("law", name, LAWS)
+    return law
