@@ -369,3 +369,27 @@ def test_loop_dissipation_is_never_negative_and_matches_the_loop_area():
         out = march_samples(u[None], el)
         assert out["n_sep"][0] > 0
         assert loop_dissipation(u[None], out["f"])[0] >= -1e-12 * exact
+
+
+def test_march_says_when_the_cap_is_hit(caplog):
+    """A cap too small for the circular law near its threshold: the element is reported as
+    not converged (and a warning logged); with room it converges after more periods."""
+    import logging
+    import sys
+
+    from workbench.contact import march
+
+    march_mod = sys.modules["workbench.contact.march"]  # the package exports the function
+
+    el = _one_element(mu=0.5, kt=1e5, kn=2e5, n0=2.0, law="circular")
+    nt = 128
+    tau = 2 * np.pi * np.arange(nt) / nt
+    u = np.stack([1.01e-5 * np.cos(tau), 0.99e-5 * np.sin(tau), 0 * tau], -1)[None]
+    args = (u, np.zeros((nt, 1)), np.zeros((1, nt)), el.mu, el.kt1, el.kt2, el.kn, el.n0)
+    march_mod._warned.discard("circular")
+    with caplog.at_level(logging.WARNING, logger="workbench.contact.march"):
+        short = march(*args, "circular", False, max_periods=3)
+    assert not short["converged"][0] and short["periods"][0] == 3
+    assert "did not repeat" in caplog.text
+    full = march(*args, "circular", False)
+    assert full["converged"][0] and full["periods"][0] > 3

@@ -58,7 +58,7 @@ step = None  # the law's step: bound per law by specialise()
 
 def _march_py(
     ns, u, E, P, mu, kt1, kt2, kn, n0, want_jac, tol, max_periods,
-    f, F, J, n_slip, n_sep, contact, periods,
+    f, F, J, n_slip, n_sep, contact, periods, converged,
 ):  # fmt: skip
     n_el, nt, _ = u.shape
     nh = E.shape[1]
@@ -80,6 +80,7 @@ def _march_py(
         s[:] = 0.0
         ds[:, :] = 0.0
         p = 0
+        same = False
         while p < max_periods:
             s_start[:] = s
             scale[:] = 0.0
@@ -135,6 +136,7 @@ def _march_py(
                 if same:
                     break
         periods[e] = p
+        converged[e] = same
         ns_ = 0
         nsep = 0
         for j in range(nt):
@@ -175,7 +177,8 @@ def march(
     * ``J`` (n_el, 3, nh, 3, nh): ``dF[e, a, h] / dU[e, b, c]`` (N/m), or None;
     * ``n_slip``, ``n_sep`` (n_el,): samples slipping / separated in that period;
     * ``contact`` (n_el, nt): the contact is closed (N > 0) at each sample;
-    * ``periods`` (n_el,): periods marched (``max_periods``: not converged).
+    * ``periods`` (n_el,): periods marched; ``converged`` (n_el,): the state repeated
+      within ``tol`` (False: the cap was hit, the last period is returned).
     """
     lw = get_law(law)
     u = np.ascontiguousarray(u, dtype=float)
@@ -188,14 +191,15 @@ def march(
     n_sep = np.zeros(n_el, dtype=np.int64)
     contact = np.zeros((n_el, nt), dtype=np.bool_)
     periods = np.zeros(n_el, dtype=np.int64)
+    converged = np.zeros(n_el, dtype=np.bool_)
     arrs = [np.ascontiguousarray(a, dtype=float) for a in (mu, kt1, kt2, kn, n0)]
     specialise(_march_py, lw, "_march")(
         lw.n_state, u,
         np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(P, dtype=float),
         *arrs, bool(want_jac), float(tol), int(max_periods),
-        f, F, J, n_slip, n_sep, contact, periods,
+        f, F, J, n_slip, n_sep, contact, periods, converged,
     )  # fmt: skip
-    capped = int(np.sum(periods >= max_periods))
+    capped = int(np.sum(~converged))
     if capped and law not in _warned:
         _warned.add(law)
         log.warning(
@@ -211,4 +215,5 @@ def march(
         n_sep=n_sep,
         contact=contact,
         periods=periods,
+        converged=converged,
     )
