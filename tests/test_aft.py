@@ -74,7 +74,7 @@ def test_stuck_element_is_linear():
     assert res.status[0] == 0
 
 
-@pytest.mark.parametrize("law", ["decoupled", "circular"])
+@pytest.mark.parametrize("law", ["decoupled", "circular", "dahl"])
 @pytest.mark.parametrize("harm", [(0, 1, 2, 3), (1, 3, 5)])
 def test_aft_jacobian_against_finite_differences(law, harm):
     """dF/dU from the march equals central differences (states with slip and separation).

@@ -95,3 +95,29 @@ def test_bad_command_line_values(upd, tmp_path):
     assert r.code == 2 and "band.end_hz = 90.0" in r.err
     r = upd("frf", EXAMPLES / "sdof_jenkins.toml", "--levels", "a,b", "--out", tmp_path)
     assert r.code == 2 and "--levels" in r.err
+    for flag, val in (("--nt", "0"), ("--nt", "64,128"), ("--levels", ","), ("--harmonics", "")):
+        r = upd("frf", EXAMPLES / "sdof_jenkins.toml", flag, val, "--out", tmp_path)
+        assert r.code == 2 and flag in r.err, (flag, val, r)
+
+
+def test_dimensionless_model_reports_rad_s_and_no_mm(upd, tmp_path):
+    """length_unit = "1": frequencies also in rad/s, no *_mm keys; the three peaks
+    (max |x|, harmonic 1, RMS) each have their own frequency; --nt is used."""
+    for p in EXAMPLES.glob("sdof_jenkins.*"):
+        shutil.copy(p, tmp_path / p.name)
+    toml = tmp_path / "sdof_jenkins.toml"
+    toml.write_text(toml.read_text().replace('length_unit = "m"', 'length_unit = "1"', 1))
+    r = upd(
+        "frf", toml, "--json", "--out", tmp_path / "o", "--levels", "1", "--nt", "64",
+        "--harmonics", "0,1,2,3", "--no-stability",
+    )  # fmt: skip
+    assert r.code == 0, r
+    s = r.json
+    assert s["nt"] == 64
+    (c,) = s["curves"]
+    assert not [k for k in c if k.endswith("_mm")]
+    for key in ("peak_frequency", "h1_peak_frequency", "rms_peak_frequency"):
+        assert c[f"{key}_rad_s"] == pytest.approx(2 * 3.141592653589793 * c[f"{key}_hz"])
+    assert c["peak_reached"] and c["h1_peak_reached"]
+    assert c["peak_stability"] == "unknown" and c["n_unstable"] == 0
+    assert c["rms_amplitude"] < c["peak_amplitude"]

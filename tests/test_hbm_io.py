@@ -24,6 +24,7 @@ def test_branch_round_trip(tmp_path):
     for name in (
         "freq_hz",
         "stable",
+        "stability",
         "status",
         "friction_energy",
         "x",
@@ -36,7 +37,10 @@ def test_branch_round_trip(tmp_path):
     assert c.output_names == ("x", "z") and c.label == "two dof" and c.completed
     assert c.summary()["peak_frequency_hz"] == b.summary()["peak_frequency_hz"]
     csv = b.to_csv(tmp_path / "b.csv", unit_scale=1e3, unit="mm").read_text().splitlines()
-    assert csv[0].startswith("freq_hz,stable,newton_its,energy_residual,x_amp_mm")
+    head = "freq_hz,stable,stability,newton_its,energy_residual,accuracy,x_amp_mm"
+    assert csv[0].startswith(head)
+    words = {line.split(",")[2] for line in csv[1:]}
+    assert words <= {"stable", "unstable", "unknown"} and words
     assert len(csv) == b.n_points + 1
     assert not list(tmp_path.glob(".*part"))  # atomic writes leave no temporary file
 
@@ -151,3 +155,16 @@ def test_model_file_errors_name_the_key(tmp_path, edit, param):
     with pytest.raises(InputError) as e:
         load_frf_model(p)
     assert e.value.param == param
+
+
+def test_branch_without_verdicts_loads_as_stable_or_unstable(tmp_path):
+    """A file written before the three-valued verdict (no 'stability' dataset) still loads."""
+    import h5py
+
+    ex = two_dof_contact()
+    b = frequency_response(ex.system, ex.f1, 1.0, (150, 160), ex.outputs, harmonics=(0, 1, 2))
+    p = b.save(tmp_path / "b.h5")
+    with h5py.File(p, "a") as h:
+        del h["stability"]
+    c = Branch.load(p)
+    np.testing.assert_array_equal(c.stability, b.stable.astype(np.int8))

@@ -55,23 +55,23 @@ def test_residual_jacobians_against_finite_differences(space, backend):
     assert hb.space == space and hb.lin.kind == backend
     w = TWO_PI * 60.0
     x = hb.stuck_solution(w) * 4 + rng.normal(size=hb.N) * 2e-6
-    hb.residual(x, w)
-    assert set(hb.aft.status) & {1, 2}, "the state must slip or separate somewhere"
-    J = hb.dense_jacobian(x, w)
+    ev = hb.evaluate(x, w)
+    assert set(ev.aft.status) & {1, 2}, "the state must slip or separate somewhere"
+    J = hb.dense_jacobian(ev)
     h = 1e-10
     Jfd = np.column_stack(
         [(hb.residual(x + h * e, w) - hb.residual(x - h * e, w)) / (2 * h) for e in np.eye(hb.N)]
     )
     assert np.abs(J - Jfd).max() < 1e-6 * np.abs(J).max()
     v = rng.normal(size=hb.N)
-    np.testing.assert_allclose(hb.jvp(x, w, v), J @ v, rtol=0, atol=1e-12 * np.abs(J @ v).max())
+    np.testing.assert_allclose(hb.jvp(ev, v), J @ v, rtol=0, atol=1e-12 * np.abs(J @ v).max())
     dw = 1e-4
     fd_w = (hb.residual(x, w + dw) - hb.residual(x, w - dw)) / (2 * dw)
-    assert np.abs(fd_w - hb.residual_omega(x, w)).max() < 1e-6 * np.abs(fd_w).max()
+    assert np.abs(fd_w - hb.residual_omega(ev)).max() < 1e-6 * np.abs(fd_w).max()
     # the reduced / single-precision factorisations solve with J
     b = rng.normal(size=hb.N)
     for single in (False, True):
-        F = Factorization(hb, x, w, 1.0, 1.0, hb.residual_omega(x, w), single=single)
+        F = Factorization(hb, ev, hb.residual_omega(ev), single=single)
         np.testing.assert_allclose(J @ F.solve(b, refine=2 if single else 0), b, atol=1e-9)
 
 
@@ -141,7 +141,8 @@ def test_recovered_dofs_satisfy_the_full_harmonic_balance(backend):
     corr = Corrector(hb, opts, 1e-5, w)
     res = corr.solve_natural(hb.stuck_solution(w), w)
     assert res.converged
-    Q = hb.response(res.x, w)  # (nh, n)
+    ev = hb.evaluate(res.x, w)
+    Q = hb.response(ev)  # (nh, n)
     U = Q @ sysm.contacts.W.T.toarray()
     from workbench.hbm.aft import aft
 
@@ -152,7 +153,7 @@ def test_recovered_dofs_satisfy_the_full_harmonic_balance(backend):
         Q @ sysm.K.T + (nab @ Q) @ C.T + (nab @ nab @ Q) @ sysm.M.T + F @ sysm.contacts.W.toarray()
     )
     rhs = hb.P
-    assert set(hb.aft.status) & {1, 2}
+    assert set(ev.aft.status) & {1, 2}
     assert np.abs(lhs - rhs).max() < 1e-8 * np.abs(rhs).max()
 
 
@@ -250,3 +251,22 @@ def test_system_without_contacts_is_its_linear_frf():
     grid = np.linspace(5, 40, 200001)
     top = _linear_frf(M, K, C, 2.0 * np.array([1.0, 0.3j]), grid, 0).max()
     assert b.summary()["peak_amplitude"] == pytest.approx(top, rel=1e-6)
+
+
+def test_evaluations_are_explicit_state():
+    """An evaluation is a record: a later evaluation elsewhere does not change what an
+    earlier one gives (Jacobian, point data), and the frozen System is not written."""
+    sysm = small_system("modal")
+    f = Fourier((0, 1, 2, 3), 64)
+    rng = np.random.default_rng(4)
+    hb = HarmonicBalance(sysm, (rng.normal(size=sysm.n) + 0j) * 3, f, [0])
+    before = dict(vars(sysm))
+    w = TWO_PI * 60.0
+    x0 = hb.stuck_solution(w) * 4
+    ev0 = hb.evaluate(x0, w)
+    J0, pd0 = hb.dense_jacobian(ev0), hb.point_data(ev0)
+    hb.evaluate(x0 * 3 + 1e-6, w * 1.1)  # elsewhere
+    np.testing.assert_array_equal(hb.dense_jacobian(ev0), J0)
+    assert hb.point_data(ev0).out_amp[0] == pd0.out_amp[0]
+    assert vars(sysm).keys() == before.keys()
+    assert not [k for k in vars(hb) if k.startswith("_") and k != "_pos"]

@@ -15,8 +15,8 @@ from workbench.hbm import (
     time_response,
 )
 from workbench.hbm.corrector import Corrector, Factorization
-from workbench.hbm.examples import sdof_jenkins, sdof_unilateral
-from workbench.hbm.stability import hill_arpack, hill_dense
+from workbench.hbm.examples import sdof_jenkins, sdof_unilateral, two_dof_contact
+from workbench.hbm.stability import STABLE, UNSTABLE, hill_arpack, hill_dense, hill_eig
 
 TWO_PI = 2 * np.pi
 HARM = tuple(range(8))
@@ -30,26 +30,29 @@ def unilateral():
 
 
 def test_linear_floquet_exponents_are_the_damped_poles():
-    """Stuck contact: Hill's exponents are -zeta w_n +- i w_d, folded into |Im| <= w / 2."""
+    """Stuck contact: the kept (most centred) Hill exponents are the poles -zeta w_n +- i w_d
+    themselves (eigenvector on harmonic 0 alone), not one of their copies shifted by i k w."""
     ex = sdof_jenkins(mu=1e6)  # never slips
     s = ex.system
     f = Fourier((0, 1, 2, 3), 64)
     hb = HarmonicBalance(s, ex.f1, f, [0], 1.0)
     w = TWO_PI * 120.0
-    hb.residual(hb.stuck_solution(w), w)
-    st = hill_dense(*hb.hill_dense(w), w)
+    ev = hb.evaluate(hb.stuck_solution(w), w)
+    st = hill_dense(*hb.hill_dense(ev), w, f.harmonics)
     wn = np.sqrt((s.K[0, 0] + s.contacts.kt1[0]) / s.M[0, 0])
     z = s.zeta[0]
     wd = wn * np.sqrt(1 - z * z)
-    folded = (wd + w / 2) % w - w / 2  # the representative of +i w_d in |Im| <= w / 2
-    for target in (-z * wn + 1j * folded, -z * wn - 1j * folded):
+    assert st.exponents.size == 2 and st.count_ok
+    for target in (-z * wn + 1j * wd, -z * wn - 1j * wd):
         assert np.min(np.abs(st.exponents - target)) < 1e-8 * wn
     assert abs(st.max_real + z * wn) < 1e-8 * wn and st.stable
 
 
 @pytest.mark.parametrize("space", ["condensed", "physical"])
 def test_arpack_shift_invert_matches_the_dense_hill_exponents(space):
-    """The Woodbury shift-invert (large models) finds the dense solver's exponents near 0."""
+    """The Woodbury shift-invert (large models) finds the dense solver's exponents near 0,
+    covers the disc |lambda| <= w/2 where any bifurcating exponent crosses, and agrees
+    with the dense verdict."""
     rng = np.random.default_rng(2)
     n = 40
     A = rng.normal(size=(n, n))
@@ -59,24 +62,28 @@ def test_arpack_shift_invert_matches_the_dense_hill_exponents(space):
     el = ContactElements.from_dofs(n, dofs, mu=0.3, kt=3e4, kn=5e4, n0=0.5)
     s = System(M=M, K=K, zeta=0.01, contacts=el)
     f = Fourier((0, 1, 2, 3), 64)
-    hb = HarmonicBalance(s, rng.normal(size=n) + 0j, f, [0], 4.0, space=space)
+    hb = HarmonicBalance(s, rng.normal(size=n) + 0j, f, [0], 1.0, space=space)
     w = TWO_PI * 40.0
     res = Corrector(hb, SolverOptions(), 1e-4, w).solve_natural(hb.stuck_solution(w), w)
     assert res.converged
-    hb.residual(res.x, w)
-    assert set(hb.aft.status) & {1, 2}
-    dense = hill_dense(*hb.hill_dense(w), w)
-    lu = Factorization(hb, res.x, w, 1.0, 1.0, hb.residual_omega(res.x, w))
-    size, op = hb.hill_shift_invert(w, lu.solve)
+    ev = hb.evaluate(res.x, w)
+    assert set(ev.aft.status) & {1, 2}
+    dense = hill_dense(*hb.hill_dense(ev), w, f.harmonics)
+    assert dense.count_ok
+    lu = Factorization(hb, ev, hb.residual_omega(ev))
+    size, op = hb.hill_shift_invert(ev, lu.solve)
     assert size == 2 * n * f.nh
-    arp = hill_arpack(size, op, w, n_exp=6)
-    assert arp.converged
-    # every exponent ARPACK returns is one of the dense ones
+    arp = hill_arpack(size, op, w, f.harmonics, n_exp=6, n_max=400)
+    assert arp.converged and arp.count_ok
+    every = hill_eig(*hb.hill_dense(ev))[0]
+    # every exponent ARPACK keeps is an eigenvalue of the dense problem (to ARPACK's 1e-6)
     for lam in arp.exponents:
-        assert np.min(np.abs(dense.exponents - lam)) < 1e-6 * abs(w)
-    near0 = dense.exponents[np.argsort(np.abs(dense.exponents))][:4]
-    for lam in near0:
+        assert np.min(np.abs(every - lam)) < 1e-6 * abs(w)
+    # the dense centred exponents inside the disc are all found
+    inside = dense.exponents[np.abs(dense.exponents) < 0.45 * w]
+    for lam in inside:
         assert np.min(np.abs(arp.exponents - lam)) < 1e-6 * abs(w)
+    assert arp.verdict == dense.verdict
 
 
 def test_continuation_passes_the_turning_points(unilateral):
@@ -97,7 +104,8 @@ def test_hill_flags_exactly_the_middle_branch(unilateral):
     back = np.flatnonzero(np.diff(b.freq_hz) < 0)
     middle = np.zeros(b.n_points, bool)
     middle[back.min() + 1 : back.max() + 1] = True  # points strictly after the first fold
-    unstable = ~b.stable
+    unstable = b.unstable
+    assert not b.unknown.any()
     # allow the fold points themselves either way (an exponent crosses zero there)
     inner = middle.copy()
     inner[[back.min() + 1, back.max()]] = False
@@ -127,9 +135,10 @@ def test_time_integration_confirms_the_stability_verdicts(unilateral):
         j = idx[np.argmin(np.abs(b.freq_hz[idx] - fq))]
         res = corr.solve_natural(b.x[j], w)
         assert res.converged
-        Q = hb.response(res.x, w)
-        amp = hb.point_data(res.x, w).out_amp[0]
-        stable = hill_dense(*hb.hill_dense(w), w).stable
+        ev = hb.evaluate(res.x, w)
+        Q = hb.response(ev)
+        amp = hb.point_data(ev).out_amp[0]
+        stable = hill_dense(*hb.hill_dense(ev), w, f.harmonics).stable
         assert stable == (name != "middle")
         q0, v0 = f.state_at(Q, w)
         tr = time_response(
@@ -172,3 +181,99 @@ def test_lost_contact_stops_the_branch_and_keeps_it():
     assert b.n_points >= 3 and np.all(b.status == 0)  # everything kept is still closed
     # the last kept point is close to opening: its amplitude nears n0 / kn
     assert b.out_amp[-1, 0] > 0.5 * 1.0 / k
+
+
+def jenkins_unit() -> System:
+    """m = 1 kg, k = 1 N/m, c = 0.02 N s/m, Jenkins kt = 20 N/m, mu N = 1 N (dimensionless)."""
+    el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
+    return System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
+
+
+@pytest.fixture(scope="module")
+def jenkins_branch():
+    s = jenkins_unit()
+    band = (0.5 / TWO_PI, 3.0 / TWO_PI)
+    return s, frequency_response(s, np.array([1.0 + 0j]), 1.0, band, [0], harmonics=HARM)
+
+
+def test_jenkins_oscillator_is_stable_everywhere(jenkins_branch):
+    """The classic friction oscillator has no unstable orbit: every point's verdict is stable
+    with the count check passed, and the kept pair decays at -c / 2m (its two exponents
+    sum to the trace -c/m of the linear part: the friction force does not depend on the
+    velocity)."""
+    _, b = jenkins_branch
+    assert b.completed and np.all(b.stability == 1)
+    assert not b.unstable.any() and not b.unknown.any()
+    slipping = b.status[:, 0] == 1
+    assert slipping.sum() > 10
+    np.testing.assert_allclose(b.max_floquet_real, -0.01, rtol=1e-6)
+    assert b.summary()["n_unstable"] == 0 and b.summary()["peak_stability"] == "stable"
+
+
+@pytest.mark.parametrize("omega", [1.01, 1.3, 1.7])
+def test_jenkins_time_integration_settles_on_the_hbm_orbit(jenkins_branch, omega):
+    """Newmark from rest reaches the orbit the harmonic balance found (stable verdict):
+    amplitude within 1 % (the time step and the harmonic truncation, both ~0.1 %)."""
+    s, b = jenkins_branch
+    f = Fourier(HARM, b.nt)
+    hb = HarmonicBalance(s, np.array([1.0 + 0j]), f, [0], 1.0)
+    corr = Corrector(hb, SolverOptions(), 1e-2, omega)
+    j = int(np.argmin(np.abs(b.freq_hz * TWO_PI - omega)))
+    res = corr.solve_natural(b.x[j], omega)
+    assert res.converged
+    st = hill_dense(*hb.hill_dense(hb.evaluate(res.x, omega)), omega, f.harmonics)
+    assert st.verdict == STABLE and st.count_ok
+    amp = hb.point_data(res.x, omega).out_amp[0]
+    tr = time_response(
+        s, np.array([1.0 + 0j]), 1.0, omega / TWO_PI, [0], steps_per_period=512, tol=1e-8
+    )
+    assert abs(tr.amplitude[0] / amp - 1) < 1e-2
+
+
+def test_two_dof_separating_point_stays_unstable():
+    """The two-DOF example at level 3 N, 98.85 Hz (contact opening part of the period):
+    a centred pair with a positive real part; count check passed, verdict unstable."""
+    ex = two_dof_contact()
+    w = TWO_PI * 98.85
+    f = Fourier(tuple(range(6)), 128)
+    hb = HarmonicBalance(ex.system, ex.f1, f, ex.outputs, 3.0)
+    res = Corrector(hb, SolverOptions(), 1e-4, w).solve_natural(hb.stuck_solution(w), w)
+    assert res.converged
+    ev = hb.evaluate(res.x, w)
+    assert ev.aft.status[0] == 2
+    st = hill_dense(*hb.hill_dense(ev), w, f.harmonics)
+    assert st.count_ok and st.verdict == UNSTABLE
+    assert st.max_real > 0.01 * w
+
+
+def test_stability_off_is_unknown_not_stable():
+    """Without Hill's method the verdict is unknown (-1), never stable, in data and CSV."""
+    s = jenkins_unit()
+    b = frequency_response(
+        s,
+        np.array([1.0 + 0j]),
+        1.0,
+        (0.8 / TWO_PI, 1.2 / TWO_PI),
+        [0],
+        harmonics=(0, 1, 2, 3),
+        options=SolverOptions(stability=False),
+    )
+    assert b.n_points and np.all(b.stability == -1) and not b.stable.any()
+    sm = b.summary()
+    assert sm["n_unstable"] == 0 and sm["n_stability_unknown"] == b.n_points
+    assert sm["peak_stability"] == "unknown"
+
+
+def test_count_check_flags_an_ambiguous_selection():
+    """Two eigenvectors equally centred across the cut (a tie): the count check fails and
+    the verdict is unknown, even though every kept exponent is stable."""
+    from workbench.hbm.stability import select_centred
+
+    harmonics = (0, 1)
+    # three eigenvectors on (Q0, Qc1, Qs1) of one coordinate: two identical in weight
+    P = np.zeros((3, 1, 3), complex)
+    P[0, 0, 0] = 1.0  # harmonic 0 only: rms 0
+    P[1, 0, 1] = P[1, 0, 2] = 1.0  # cos 1 only: rms 1 (twice: a tie at the cut)
+    lam = np.array([-1.0, -2.0 + 1j, -2.0 - 1j])
+    keep, _, ok = select_centred(lam, P, harmonics, 2)
+    assert not ok and keep.size == 2

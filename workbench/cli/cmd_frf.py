@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 from pathlib import Path
 from typing import Any
 
@@ -18,10 +19,14 @@ excitation level of the model file.
 
 For each level it writes curve_<i>.h5 (the branch), curve_<i>.csv and
 curve_<i>.png (status map), plus frf.png (all levels) and summary.json to --out,
-and prints per level: peak_frequency_hz, peak_amplitude (largest |y(t)| over the
-period of the first output DOF at the peak, in the model's length unit),
-h1_amplitude (its harmonic-1 amplitude there), n_points, wall_s and the worst
-energy-balance residual. Examples: studies/examples/*.toml.
+and prints per level: peak_frequency_hz and peak_amplitude (largest |y(t)| over
+the period of the first output DOF, in the model's length unit),
+h1_peak_frequency_hz and h1_amplitude (the harmonic-1 amplitude at its own
+peak), rms_peak_frequency_hz and rms_amplitude, peak_stability (stable,
+unstable or unknown), n_points, wall_s, the worst energy-balance residual and
+the accuracy indicator (accuracy_max, accuracy_warning). With
+length_unit = "1" (a dimensionless model) the frequencies are also given in
+rad/s (*_rad_s) and no *_mm keys are written. Examples: studies/examples/*.toml.
 """
 
 log = logging.getLogger(__name__)
@@ -46,9 +51,12 @@ def _list(text: str | None, name: str, cast) -> list | None:
     if text is None:
         return None
     try:
-        return [cast(v) for v in text.replace(" ", "").split(",") if v]
+        vals = [cast(v) for v in text.replace(" ", "").split(",") if v]
     except ValueError:
         raise InputError(name, text, "a comma-separated list of numbers") from None
+    if not vals:
+        raise InputError(name, text, "a comma-separated list of at least one number")
+    return vals
 
 
 def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
@@ -70,12 +78,19 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     if hs is not None:
         over.setdefault("hbm", {})["harmonics"] = hs
     if args.nt is not None:
-        over.setdefault("hbm", {})["nt"] = _list(args.nt, "--nt", int)[0]
+        nt = _list(args.nt, "--nt", int)
+        if len(nt) != 1 or nt[0] < 1:
+            # 0 would silently mean "automatic": refuse it, omitting --nt is the way
+            raise InputError(
+                "--nt", args.nt, "one whole number of samples per period >= 1 (omit for automatic)"
+            )
+        over.setdefault("hbm", {})["nt"] = nt[0]
     if args.no_stability:
         over.setdefault("solver", {})["stability"] = False
     model = load_frf_model(args.model, over)
     out = ctx.out_dir(f"results/frf/{model.name}")
     mm = model.length_unit == "m"
+    dimensionless = model.length_unit == "1"
     branches, rows, failures = [], [], []
     for i, level in enumerate(model.levels):
         b = frequency_response(
@@ -105,8 +120,12 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         row = b.summary()
         row["peak_amplitude_unit"] = model.length_unit
         if mm and row["peak_amplitude"] is not None:
-            row["peak_amplitude_mm"] = row["peak_amplitude"] * 1e3
-            row["h1_amplitude_mm"] = row["h1_amplitude"] * 1e3
+            for key in ("peak_amplitude", "h1_amplitude", "rms_amplitude"):
+                row[f"{key}_mm"] = row[key] * 1e3
+        if dimensionless:  # the time unit is the model's too: angular frequencies, rad/s
+            for key in ("peak_frequency", "h1_peak_frequency", "rms_peak_frequency"):
+                hz = row[f"{key}_hz"]
+                row[f"{key}_rad_s"] = None if hz is None else 2 * math.pi * hz
         row["files"] = files
         rows.append(row)
         if b.failed:

@@ -21,8 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError, check_choice
-
-LAWS = ("decoupled", "circular")
+from .laws import LAWS  # every law module of workbench.contact.laws
 
 
 def _per_element(name: str, value: object, n_el: int, lo: float = 0.0) -> np.ndarray:
@@ -51,8 +50,9 @@ class ContactElements:
     ``kt1``, ``kt2`` (N/m), normal stiffness ``kn`` (N/m) and normal preload
     ``n0`` (N, compressive positive). ``law`` is "decoupled" (two Jenkins
     elements, slip limit ``mu N`` on each tangential axis, as in the study of
-    the conical damper) or "circular" (one slip limit ``|T| <= mu N`` in the
-    tangent plane).
+    the conical damper), "circular" (one slip limit ``|T| <= mu N`` in the
+    tangent plane) or any other law of :mod:`workbench.contact.laws`
+    ("dahl": smooth friction).
     """
 
     W: sp.csr_matrix

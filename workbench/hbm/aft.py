@@ -2,8 +2,8 @@
 
 ``aft(U, elements, fourier)`` synthesises the local relative displacement
 of every element at the ``nt`` samples of a period, marches the contact
-law over two periods (:func:`workbench.contact.aft_march`), and analyses
-the converged period back to harmonics. The Jacobian is the exact
+law over periods until its state repeats (:func:`workbench.contact.aft_march`),
+and analyses the converged period back to harmonics. The Jacobian is the exact
 derivative of that discrete march with respect to the harmonics of ``u``.
 
 Arrays: ``U`` (nh, n_el, 3) in metres (layout of :mod:`.fourier`);
@@ -32,6 +32,7 @@ class AftResult:
     n_slip: np.ndarray  # (n_el,) slipping samples
     n_sep: np.ndarray  # (n_el,) separated samples
     contact: np.ndarray  # (n_el, nt) closed at each sample
+    periods: np.ndarray | None = None  # (n_el,) periods marched until the state repeated
 
     @property
     def status(self) -> np.ndarray:
@@ -61,7 +62,7 @@ def aft(
         elements.kt2,
         elements.kn,
         elements.n0,
-        elements.law_code,
+        elements.law,
         want_jac,
     )
     F = np.ascontiguousarray(out["F"].transpose(2, 0, 1))
@@ -73,6 +74,7 @@ def aft(
         n_slip=out["n_slip"],
         n_sep=out["n_sep"],
         contact=out["contact"],
+        periods=out["periods"],
     )
 
 

@@ -33,6 +33,15 @@ element to O(1/nt^2) while the normal load stays positive; where the
 contact opens and the force jumps, the harmonic work (the quantity that
 balances the excitation) can differ from it and even change sign.
 
+Accuracy indicator (``PointData.accuracy``): the energy balance above
+closes at any converged point, however coarse the sampling, so it cannot
+tell a poor solution. The indicator compares two estimates of the contact
+work per cycle that agree only when the sampling resolves the loop: the
+trapezoid rule on the converged loops (tangential and normal) against the
+harmonic (Galerkin) work, ``|E_loop - W_harm| / |W_ext|`` (a fraction of
+the excitation work). It falls as ``nt`` grows (O(1/nt^2) for a slipping
+loop) and is what :func:`frequency_response` warns about.
+
 Mean-position anchor: when a body is held by its contacts alone (rigid-body
 modes in ``K``) and every contact holding it slips at some instant, the
 mean of its tangential position no longer changes the forces (the loop
@@ -50,7 +59,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError
-from .aft import aft, work_per_cycle
+from .aft import AftResult, aft, work_per_cycle
 from .fourier import Fourier
 from .linear import make_linear
 from .system import System
@@ -100,6 +109,7 @@ class PointData:
     out_harm: np.ndarray  # (nh, n_out) output harmonics, m
     out_amp: np.ndarray  # (n_out,) max over the period of |y(t)|, m
     out_h1: np.ndarray  # (n_out,) harmonic-1 amplitude, m
+    out_rms: np.ndarray  # (n_out,) RMS of y(t) over the period, m
     status: np.ndarray  # (n_el,) int8
     friction_energy: np.ndarray  # (n_el,) J per cycle
     work_ext: float  # J per cycle
@@ -107,11 +117,54 @@ class PointData:
     work_friction: float
     work_normal: float
     energy_residual: float
+    loop_energy: float  # J per cycle: trapezoid on the contact loops (tangential + normal)
+    accuracy: float  # |loop_energy - harmonic contact work| / |work_ext| (-)
     lost_contact: bool
 
 
+@dataclass(frozen=True, eq=False)
+class Evaluation:
+    """One evaluation of the harmonic balance at unknowns ``x`` and ``omega``: the state record.
+
+    Returned by :meth:`HarmonicBalance.evaluate`; the Jacobian, the point data,
+    the recovery of every DOF and Hill's method take it as input, so nothing
+    is cached on the :class:`HarmonicBalance` itself.
+    """
+
+    x: np.ndarray  # (N,) unknowns, m
+    omega: float  # rad/s
+    level: float  # excitation level it was evaluated at
+    U: np.ndarray  # (nh, n3) contact displacement harmonics, m
+    G: np.ndarray  # (nh, n3) regularised contact force harmonics f - K_c u, N
+    D: np.ndarray  # (n_el, 3, nh, 3, nh) dG/dU, N/m
+    aft: AftResult | None  # the contact march (None without contacts)
+    Yz: np.ndarray  # (nh, n_z) response on the linear coordinates
+    r: np.ndarray  # (N,) residual, m
+
+    def key(self) -> tuple[bytes, float, float]:
+        """What identifies the evaluation: unknowns, frequency and level."""
+        return (np.asarray(self.x, dtype=float).tobytes(), float(self.omega), float(self.level))
+
+
+@dataclass(frozen=True, eq=False)
+class HillParts:
+    """Frequency-independent Kronecker blocks of Hill's dense matrices (z coordinates)."""
+
+    K: np.ndarray
+    C: np.ndarray
+    M: np.ndarray
+    NC: np.ndarray
+    NM: np.ndarray
+    NNM: np.ndarray
+    B: np.ndarray
+
+
 class HarmonicBalance:
-    """Residual, Jacobian, recovery and energies of one system at one excitation level."""
+    """Residual, Jacobian, recovery and energies of one system at one excitation level.
+
+    Stateless between calls: :meth:`evaluate` returns an :class:`Evaluation`
+    and every derived quantity takes one (``stats`` only counts calls).
+    """
 
     def __init__(
         self,
@@ -143,9 +196,15 @@ class HarmonicBalance:
             self.W = sp.csr_matrix((0, self.n))
             self.act = np.zeros(0, dtype=int)
             self.kc = np.zeros((0, 3))
+        # rigid-body modes of K (bodies held by their contacts alone) and how they move the
+        # contacts: for the anchor below and the lost-contact check
+        self.rigid = system.rigid_modes() if self.n_el else np.zeros((self.n, 0))
+        self.rigid_w = (
+            np.asarray(self.W @ self.rigid) if self.rigid.shape[1] else np.zeros((self.n3, 0))
+        )
         # mean-position anchor: only where a body is held by its contacts alone
         self.anchor = np.zeros((self.n_el, 3))
-        if self.n_el and dc_anchor > 0 and self.rigid_modes().shape[1]:
+        if self.n_el and dc_anchor > 0 and self.rigid.shape[1]:
             self.anchor[:, 0] = dc_anchor * self.el.kt1
             self.anchor[:, 1] = dc_anchor * self.el.kt2
         if space == "auto" or not self.n_el:  # no contact: a linear system on all DOFs
@@ -163,12 +222,17 @@ class HarmonicBalance:
         self.O = observation(system, outputs)
         self.Oz = self.lin.map_z(self.O)
         self.f1 = excitation_vector(system, f1)
-        self._rigid: np.ndarray | None = None
         self.static = system.total_static_force()
         self.N = fourier.nh * self.n_s
         self.set_level(level)
-        self._state_key: tuple | None = None
-        self.stats = dict(n_residual=0, t_residual=0.0, n_jacobian=0, t_jacobian=0.0)
+        # the regularised static flexibility S H_0 W^T (n_s, n3): frequency independent
+        self.R0 = None
+        if fourier.has_dc and self.n_el:
+            Sz = self.Sz.toarray() if sp.issparse(self.Sz) else np.asarray(self.Sz)
+            self.R0 = np.asarray(self.lin.dense_receptance(0.0, Sz, self.Bz, (0,))[0]).real
+        self.stats = dict(
+            n_residual=0, t_residual=0.0, n_jacobian=0, t_jacobian=0.0, aft_periods_max=0
+        )
 
     # -- forcing ---------------------------------------------------------------
     def set_level(self, level: float) -> None:
@@ -183,7 +247,6 @@ class HarmonicBalance:
         self.level = float(level)
         self.P = P
         self.Pz = self.lin.to_z(P)
-        self._state_key = None
 
     # -- maps ------------------------------------------------------------------
     @staticmethod
@@ -204,78 +267,85 @@ class HarmonicBalance:
     def _left(self, Yz: np.ndarray) -> np.ndarray:
         return self._rmul(Yz, self.Sz.T)
 
-    # -- residual ----------------------------------------------------------------
-    def _contact(self, X: np.ndarray) -> None:
-        """AFT at X (cached on X): G (nh, n3), D (n_el, 3, nh, 3, nh)."""
-        key = X.tobytes()
-        if self._state_key is not None and self._state_key[0] == key:
-            return
+    # -- evaluation -------------------------------------------------------------
+    def _contact(self, X: np.ndarray):
+        """AFT at X: (U (nh, n3), G (nh, n3), D (n_el, 3, nh, 3, nh), AftResult or None)."""
         f = self.fourier
         U = self.to_u(X)
-        if self.n_el:
-            res = aft(U.reshape(f.nh, self.n_el, 3), self.el, f)
-            Uloc = U.reshape(f.nh, self.n_el, 3)
-            G = res.F - self.kc[None] * Uloc
-            D = res.J.copy()
-            h = np.arange(f.nh)
-            for a in range(3):
-                D[:, a, h, a, h] -= self.kc[:, a][:, None]
-            if f.has_dc and self.anchor.any():
-                G[0] += self.anchor * Uloc[0]
-                for a in range(2):
-                    D[:, a, 0, a, 0] += self.anchor[:, a]
-        else:
-            res, G, D = None, np.zeros((f.nh, 0, 3)), np.zeros((0, 3, f.nh, 3, f.nh))
-        self._state_key = (key,)
-        self.U, self.G, self.D, self.aft = U, G.reshape(f.nh, self.n3), D, res
+        if not self.n_el:
+            return U, np.zeros((f.nh, 0)), np.zeros((0, 3, f.nh, 3, f.nh)), None
+        res = aft(U.reshape(f.nh, self.n_el, 3), self.el, f)
+        self.stats["aft_periods_max"] = max(
+            self.stats["aft_periods_max"], int(res.periods.max(initial=0))
+        )
+        Uloc = U.reshape(f.nh, self.n_el, 3)
+        G = res.F - self.kc[None] * Uloc
+        D = res.J.copy()
+        h = np.arange(f.nh)
+        for a in range(3):
+            D[:, a, h, a, h] -= self.kc[:, a][:, None]
+        if f.has_dc and self.anchor.any():
+            G[0] += self.anchor * Uloc[0]
+            for a in range(2):
+                D[:, a, 0, a, 0] += self.anchor[:, a]
+        return U, G.reshape(f.nh, self.n3), D, res
 
-    def residual(self, x: np.ndarray, omega: float) -> np.ndarray:
-        """r (N,) in metres at unknowns x (N,) and angular frequency omega (rad/s)."""
+    def evaluate(self, x: np.ndarray, omega: float) -> Evaluation:
+        """The state at unknowns x (N,) and angular frequency omega (rad/s): AFT and residual."""
         import time
 
         t0 = time.perf_counter()
-        X = np.asarray(x, dtype=float).reshape(self.fourier.nh, self.n_s)
-        self._contact(X)
-        self.Yz = self.lin.solve(omega, self.Pz - self._rmul(self.G, self.Bz))
-        r = X - self._left(self.Yz)
+        x = np.array(x, dtype=float).ravel()
+        X = x.reshape(self.fourier.nh, self.n_s)
+        U, G, D, res = self._contact(X)
+        Yz = self.lin.solve(omega, self.Pz - self._rmul(G, self.Bz))
+        r = (X - self._left(Yz)).ravel()
         self.stats["n_residual"] += 1
         self.stats["t_residual"] += time.perf_counter() - t0
-        return r.ravel()
+        return Evaluation(x, float(omega), self.level, U, G, D, res, Yz, r)
 
-    def residual_omega(self, x: np.ndarray, omega: float) -> np.ndarray:
-        """dr/dw (N,) in m s/rad at x."""
-        X = np.asarray(x, dtype=float).reshape(self.fourier.nh, self.n_s)
-        self._contact(X)
-        dY = self.lin.solve(omega, self.Pz - self._rmul(self.G, self.Bz), deriv=True)
+    def at(self, state: Evaluation | np.ndarray, omega: float | None = None) -> Evaluation:
+        """``state`` itself, or the evaluation at unknowns ``state`` and ``omega``."""
+        if isinstance(state, Evaluation):
+            return state
+        if omega is None:
+            raise TypeError("omega is needed with unknowns x")
+        return self.evaluate(state, omega)
+
+    def residual(self, x: np.ndarray, omega: float) -> np.ndarray:
+        """r (N,) in metres at unknowns x (N,) and angular frequency omega (rad/s)."""
+        return self.evaluate(x, omega).r
+
+    def residual_omega(self, ev: Evaluation) -> np.ndarray:
+        """dr/dw (N,) in m s/rad at an evaluation."""
+        dY = self.lin.solve(ev.omega, self.Pz - self._rmul(ev.G, self.Bz), deriv=True)
         return -self._left(dY).ravel()
 
-    def jvp(self, x: np.ndarray, omega: float, v: np.ndarray) -> np.ndarray:
-        """``dr/dx @ v`` at x (exact, matrix-free)."""
+    def jvp(self, ev: Evaluation, v: np.ndarray) -> np.ndarray:
+        """``dr/dx @ v`` at an evaluation (exact, matrix-free)."""
         f = self.fourier
-        X = np.asarray(x, dtype=float).reshape(f.nh, self.n_s)
-        self._contact(X)
         V = np.asarray(v, dtype=float).reshape(f.nh, self.n_s)
-        dG = self._dG(self.to_u(V))
-        return (V + self._left(self.lin.solve(omega, self._rmul(dG, self.Bz)))).ravel()
+        dG = self._dG(ev.D, self.to_u(V))
+        return (V + self._left(self.lin.solve(ev.omega, self._rmul(dG, self.Bz)))).ravel()
 
-    def _dG(self, dU: np.ndarray) -> np.ndarray:
+    def _dG(self, D: np.ndarray, dU: np.ndarray) -> np.ndarray:
         """D applied to contact displacement harmonics dU (nh, n3) -> (nh, n3)."""
         f = self.fourier
         if not self.n_el:
             return np.zeros_like(dU)
         loc = dU.reshape(f.nh, self.n_el, 3).transpose(1, 2, 0).reshape(self.n_el, 3 * f.nh, 1)
-        out = np.matmul(self.D.reshape(self.n_el, 3 * f.nh, 3 * f.nh), loc)
+        out = np.matmul(D.reshape(self.n_el, 3 * f.nh, 3 * f.nh), loc)
         return out.reshape(self.n_el, 3, f.nh).transpose(2, 0, 1).reshape(f.nh, self.n3)
 
-    def dense_jacobian(self, x: np.ndarray, omega: float, dtype=np.float64) -> np.ndarray:
-        """dr/dx (N, N) assembled densely at x (``dtype`` float32 for a single-precision LU)."""
+    def dense_jacobian(self, ev: Evaluation, dtype=np.float64) -> np.ndarray:
+        """dr/dx (N, N) assembled densely at an evaluation (float32: a single-precision LU)."""
         if not self.n_el:
             return np.eye(self.N, dtype=dtype)
         if self.space == "condensed" and self.act.size == self.n3:
-            J = self.jacobian_columns(x, omega, full=True, dtype=dtype)
+            J = self.jacobian_columns(ev, full=True, dtype=dtype)
         else:
             J = np.zeros((self.N, self.N), dtype=dtype)
-            C, cols = self.jacobian_columns(x, omega, dtype=dtype)
+            C, cols = self.jacobian_columns(ev, dtype=dtype)
             if self.space == "condensed":
                 J[:, cols] = C
             else:
@@ -283,14 +353,14 @@ class HarmonicBalance:
         J.flat[:: self.N + 1] += 1.0
         return J
 
-    def element_classes(self) -> tuple[np.ndarray, np.ndarray]:
-        """(nonlinear, anchored) element indices at the current state.
+    def element_classes(self, ev: Evaluation) -> tuple[np.ndarray, np.ndarray]:
+        """(nonlinear, anchored) element indices at an evaluation.
 
         An element whose contact Jacobian ``D`` is zero apart from the mean-position
         anchor (stuck and closed all period) only adds the anchor's two constant
         entries; every other element adds full blocks.
         """
-        D = self.D.copy()
+        D = ev.D.copy()
         for a in range(2):
             D[:, a, 0, a, 0] -= self.anchor[:, a] if self.fourier.has_dc else 0.0
         # stuck blocks cancel to round-off (the march adds kt dE step by step)
@@ -300,8 +370,7 @@ class HarmonicBalance:
 
     def jacobian_columns(
         self,
-        x: np.ndarray,
-        omega: float,
+        ev: Evaluation,
         elements: np.ndarray | None = None,
         full: bool = False,
         dtype=np.float64,
@@ -318,8 +387,7 @@ class HarmonicBalance:
         t0 = time.perf_counter()
         f = self.fourier
         nh, n_s, n_el = f.nh, self.n_s, self.n_el
-        X = np.asarray(x, dtype=float).reshape(nh, n_s)
-        self._contact(X)
+        omega = ev.omega
         els = (
             np.arange(n_el)
             if elements is None or self.space != "condensed"
@@ -332,9 +400,9 @@ class HarmonicBalance:
             Sz, Bz = Sz.astype(np.float32), Bz.astype(np.float32)
         R = self.lin.dense_receptance(omega, Sz, Bz, tuple(k for k in f.harmonics if k > 0))
         if f.has_dc:  # frequency independent: from the cached static flexibility
-            R[0] = self.static_receptance()[:, (3 * els[:, None] + np.arange(3)).ravel()]
+            R[0] = self.R0[:, (3 * els[:, None] + np.arange(3)).ravel()]
         # D by output component: (nh, ne, 3, 3 nh) with the last axis (d', h')
-        Dh = np.ascontiguousarray(self.D[els].transpose(2, 0, 1, 3, 4), dtype=dtype)
+        Dh = np.ascontiguousarray(ev.D[els].transpose(2, 0, 1, 3, 4), dtype=dtype)
         Dh = Dh.reshape(nh, ne, 3, 3 * nh)
         Jx = np.empty((nh, ne, n_s, 3 * nh), dtype=dtype)  # rows (h, i), cols (e, d', h')
 
@@ -380,21 +448,10 @@ class HarmonicBalance:
         a = self.anchor[elements, :2].ravel()
         keep = (self._pos[u] >= 0) & (a != 0)
         u, a = u[keep], a[keep]
-        R0 = self.static_receptance()[:, u]
+        R0 = self.R0[:, u]
         C = np.zeros((self.N, u.size))
         C[: self.n_s] = R0 * a
         return C, self._pos[u]
-
-    def static_receptance(self) -> np.ndarray:
-        """``S H_0 W^T`` (n_s, n3): the regularised static flexibility (cached)."""
-        if getattr(self, "_R0", None) is None:
-            Sz = self.Sz.toarray() if sp.issparse(self.Sz) else np.asarray(self.Sz)
-            self._R0 = (
-                np.asarray(self.lin.dense_receptance(0.0, Sz, self.Bz, (0,))[0]).real
-                if self.fourier.has_dc
-                else None
-            )
-        return self._R0
 
     def _bz_rows(self, els: np.ndarray):
         """Rows of the contact map on z for the three directions of ``els``."""
@@ -411,37 +468,50 @@ class HarmonicBalance:
         Y = self.lin.solve(omega, self.Pz - self._rmul(G0, self.Bz))
         return self._left(Y).ravel()
 
-    def response(self, x: np.ndarray, omega: float) -> np.ndarray:
-        """Harmonics of every generalised coordinate q (nh, n) at a solution x."""
-        self.residual(x, omega)
-        return self.lin.from_z(self.Yz)
+    def response(self, state: Evaluation | np.ndarray, omega: float | None = None) -> np.ndarray:
+        """Harmonics of every generalised coordinate q (nh, n) at a solution.
 
-    def point_data(self, x: np.ndarray, omega: float, n_fine: int = 256) -> PointData:
-        """Outputs, contact status, friction energies and the energy balance at a solution."""
+        ``state``: an :class:`Evaluation`, or the unknowns x with ``omega`` (rad/s).
+        """
+        return self.lin.from_z(self.at(state, omega).Yz)
+
+    def point_data(
+        self, state: Evaluation | np.ndarray, omega: float | None = None, n_fine: int = 256
+    ) -> PointData:
+        """Outputs, contact status, friction energies and the energy balance at a solution.
+
+        ``state``: an :class:`Evaluation`, or the unknowns x with ``omega`` (rad/s).
+        """
         f = self.fourier
-        self.residual(x, omega)
-        Y = self._rmul(self.Yz, self.Oz.T)
+        ev = self.at(state, omega)
+        omega = ev.omega
+        Y = self._rmul(ev.Yz, self.Oz.T)
         out_amp = f.amplitude(Y, n_fine)
         out_h1 = f.h1_amplitude(Y)
-        work_ext = float(np.sum(work_per_cycle(self.Pz, self.Yz, f)))
-        work_visc = self.lin.viscous_work(omega, self.Yz)
+        out_rms = f.rms(Y)
+        work_ext = float(np.sum(work_per_cycle(self.Pz, ev.Yz, f)))
+        work_visc = self.lin.viscous_work(omega, ev.Yz)
         if self.n_el:
-            Uloc = self.U.reshape(f.nh, self.n_el, 3)
-            wc = work_per_cycle(self.aft.F, Uloc, f)  # (n_el, 3)
+            Uloc = ev.U.reshape(f.nh, self.n_el, 3)
+            wc = work_per_cycle(ev.aft.F, Uloc, f)  # (n_el, 3)
             w_f = float(wc[:, 0].sum() + wc[:, 1].sum())
             w_n = float(wc[:, 2].sum())
-            fric = loop_dissipation(self.aft.u, self.aft.f)
-            status = self.aft.status
-            lost = self.lost_contact()
+            fric = loop_dissipation(ev.aft.u, ev.aft.f)
+            e_loop = float(fric.sum() + loop_normal_work(ev.aft.u, ev.aft.f).sum())
+            status = ev.aft.status
+            lost = self.lost_contact(ev)
         else:
             fric, w_f, w_n, status, lost = np.zeros(0), 0.0, 0.0, np.zeros(0, np.int8), False
+            e_loop = 0.0
         den = max(abs(work_ext), abs(work_visc) + abs(w_f) + abs(w_n), 1e-300)
         resid = abs(work_ext - work_visc - w_f - w_n) / den
+        accuracy = abs(e_loop - w_f - w_n) / den
         return PointData(
             omega=omega,
             out_harm=Y,
             out_amp=out_amp,
             out_h1=out_h1,
+            out_rms=out_rms,
             status=status,
             friction_energy=fric,
             work_ext=work_ext,
@@ -449,38 +519,25 @@ class HarmonicBalance:
             work_friction=w_f,
             work_normal=w_n,
             energy_residual=resid,
+            loop_energy=e_loop,
+            accuracy=accuracy,
             lost_contact=lost,
         )
 
-    def rigid_modes(self) -> np.ndarray:
-        """(n, r) rigid-body modes of K (bodies held by their contacts alone), cached."""
-        cache = getattr(self.system, "_rigid_cache", None)
-        if cache is None:
-            cache = self.system.rigid_modes()
-            object.__setattr__(self.system, "_rigid_cache", cache)
-        return cache
-
-    def rigid_contact_modes(self) -> np.ndarray:
-        """``W V`` (n3, r): how the rigid-body modes move the contacts."""
-        if self._rigid is None:
-            V = self.rigid_modes()
-            self._rigid = np.asarray(self.W @ V) if V.shape[1] else np.zeros((self.n3, 0))
-        return self._rigid
-
-    def lost_contact(self) -> bool:
+    def lost_contact(self, ev: Evaluation) -> bool:
         """True if at some instant the closed contacts no longer hold a free body.
 
         A body held only by its contacts (a rigid-body mode of ``K``) is free
         when, at some sample of the period, the rows of ``W`` of the closed
         elements do not constrain that mode: the state is singular.
         """
-        if self.aft is None or not np.any(self.aft.n_sep):
+        if ev.aft is None or not np.any(ev.aft.n_sep):
             return False
-        WV = self.rigid_contact_modes()
+        WV = self.rigid_w
         r = WV.shape[1]
         if r == 0:
             return False
-        patterns = np.unique(self.aft.contact.T, axis=0)
+        patterns = np.unique(ev.aft.contact.T, axis=0)
         for pat in patterns:
             rows = np.repeat(pat, 3)
             A = WV[rows]
@@ -492,35 +549,42 @@ class HarmonicBalance:
         return False
 
     # -- Hill's method operators -----------------------------------------------
-    def hill_dense(self, omega: float):
-        """(Delta0, Delta1, Delta2) of Hill's quadratic eigenproblem on z (dense)."""
+    def hill_parts(self) -> HillParts:
+        """The frequency-independent blocks of Hill's dense matrices (build once per branch)."""
         f = self.fourier
-        if getattr(self, "_hill_parts", None) is None:
-            Mz, Cz, Kz = self.lin.hill_blocks()
-            I = np.eye(f.nh)
-            n1 = f.nabla(1.0)
-            B = self.Bz.toarray() if sp.issparse(self.Bz) else np.asarray(self.Bz)
-            self._hill_parts = dict(
-                K=np.kron(I, Kz),
-                C=np.kron(I, Cz),
-                M=np.kron(I, Mz),
-                NC=np.kron(n1, Cz),
-                NM=np.kron(n1, Mz),
-                NNM=np.kron(n1 @ n1, Mz),
-                B=np.kron(I, B),
-            )
-        hp = self._hill_parts
-        d0 = hp["K"] + omega * hp["NC"] + omega**2 * hp["NNM"]
+        Mz, Cz, Kz = self.lin.hill_blocks()
+        I = np.eye(f.nh)
+        n1 = f.nabla(1.0)
+        B = self.Bz.toarray() if sp.issparse(self.Bz) else np.asarray(self.Bz)
+        return HillParts(
+            K=np.kron(I, Kz),
+            C=np.kron(I, Cz),
+            M=np.kron(I, Mz),
+            NC=np.kron(n1, Cz),
+            NM=np.kron(n1, Mz),
+            NNM=np.kron(n1 @ n1, Mz),
+            B=np.kron(I, B),
+        )
+
+    def hill_dense(self, ev: Evaluation, parts: HillParts | None = None):
+        """(Delta0, Delta1, Delta2) of Hill's quadratic eigenproblem on z (dense) at ``ev``.
+
+        ``parts``: :meth:`hill_parts` (built here when not given).
+        """
+        f = self.fourier
+        hp = parts if parts is not None else self.hill_parts()
+        omega = ev.omega
+        d0 = hp.K + omega * hp.NC + omega**2 * hp.NNM
         if self.n_el:
             Dfull = np.zeros((f.nh, self.n_el, 3, f.nh, self.n_el, 3))
             e = np.arange(self.n_el)
-            Dfull[:, e, :, :, e, :] = self.D.transpose(0, 2, 1, 4, 3)
+            Dfull[:, e, :, :, e, :] = ev.D.transpose(0, 2, 1, 4, 3)
             Dfull = Dfull.reshape(f.nh * self.n3, f.nh * self.n3)
-            d0 = d0 + hp["B"].T @ Dfull @ hp["B"]
-        d1 = hp["C"] + 2 * omega * hp["NM"]
-        return d0, d1, hp["M"]
+            d0 = d0 + hp.B.T @ Dfull @ hp.B
+        d1 = hp.C + 2 * omega * hp.NM
+        return d0, d1, hp.M
 
-    def hill_shift_invert(self, omega: float, jsolve) -> tuple[int, callable]:
+    def hill_shift_invert(self, ev: Evaluation, jsolve) -> tuple[int, callable]:
         """Size and action of ``A^-1 B`` for Hill's state-space form.
 
         ``jsolve(b)`` applies the inverse of the Jacobian dr/dx at the
@@ -529,6 +593,7 @@ class HarmonicBalance:
         """
         f = self.fourier
         nh, nz = f.nh, self.lin.n_z
+        omega = ev.omega
         nab = f.nabla(omega)
         lin = self.lin
 
@@ -537,7 +602,7 @@ class HarmonicBalance:
             if self.space == "condensed":
                 b = self._left(a).ravel()
                 c = jsolve(b).reshape(nh, self.n_s)
-                dG = self._dG(self.to_u(c))
+                dG = self._dG(ev.D, self.to_u(c))
                 return a - lin.solve(omega, self._rmul(dG, self.Bz))
             q = lin.from_z(a).ravel()
             c = jsolve(q).reshape(nh, self.n)
@@ -552,6 +617,17 @@ class HarmonicBalance:
             return np.concatenate([z1.ravel(), b1.ravel()])
 
         return 2 * nh * nz, op
+
+
+def loop_normal_work(u: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """(n_el,) work per cycle (J) of the normal force on its loop, trapezoid rule.
+
+    The unilateral spring is conservative: zero for a resolved loop; where the
+    contact opens between samples the trapezoid misses the kink.
+    """
+    du = np.roll(u[:, :, 2], -1, axis=1) - u[:, :, 2]
+    favg = 0.5 * (f[:, :, 2] + np.roll(f[:, :, 2], -1, axis=1))
+    return np.einsum("et,et->e", favg, du)
 
 
 def loop_dissipation(u: np.ndarray, f: np.ndarray) -> np.ndarray:

@@ -1,11 +1,17 @@
 """The result of a frequency response: a branch of periodic solutions, saved to HDF5.
 
 Per point ``i`` (in continuation order, so a curve that turns back keeps
-its order): ``freq_hz[i]``; ``stable[i]`` (Hill); ``newton_its[i]``;
+its order): ``freq_hz[i]``; ``stability[i]`` (Hill's verdict: 1 stable,
+0 unstable, -1 unknown: not computed, eigen-solver failure or a failed
+count check) and ``stable[i]`` (True only for a stable verdict; use
+:attr:`Branch.unstable` / :attr:`Branch.unknown` for the others); ``newton_its[i]``;
 ``energy_residual[i]`` (relative, work of the excitation against viscous +
-contact work per cycle); ``out_amp[i, j]`` the largest ``|y_j(t)|`` over
-the period and ``out_h1[i, j]`` the harmonic-1 amplitude of output ``j``
-(model length unit); ``out_harm[i]`` (nh, n_out) the output harmonics;
+contact work per cycle); ``accuracy[i]`` (the loop-energy vs harmonic-work
+mismatch, a fraction of the excitation work: it grows when ``nt`` or the
+harmonics do not resolve the contact loops, see :mod:`.balance`);
+``out_amp[i, j]`` the largest ``|y_j(t)|`` over the period and
+``out_h1[i, j]`` the harmonic-1 amplitude of output ``j`` (model length
+unit); ``out_harm[i]`` (nh, n_out) the output harmonics;
 ``status[i, e]`` (0 stuck, 1 stick-slip, 2 partial separation, 3 full
 separation); ``friction_energy[i, e]`` (J per cycle); ``x[i]`` the solved
 unknowns (m; the layout of :mod:`.balance`), from which
@@ -26,10 +32,12 @@ from ..io import atomic_path
 _ARRAYS = (
     "freq_hz",
     "stable",
+    "stability",
     "newton_its",
     "energy_residual",
     "out_amp",
     "out_h1",
+    "out_rms",
     "out_harm",
     "status",
     "friction_energy",
@@ -39,6 +47,7 @@ _ARRAYS = (
     "work_friction",
     "work_normal",
     "max_floquet_real",
+    "accuracy",
 )
 
 
@@ -54,10 +63,12 @@ class Branch:
     space: str = "condensed"
     freq_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
     stable: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
+    stability: np.ndarray | None = None  # int8: 1 stable, 0 unstable, -1 unknown
     newton_its: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     energy_residual: np.ndarray = field(default_factory=lambda: np.zeros(0))
     out_amp: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     out_h1: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    out_rms: np.ndarray | None = None  # (n_points, n_out) RMS over the period
     out_harm: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
     status: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.int8))
     friction_energy: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
@@ -67,6 +78,7 @@ class Branch:
     work_friction: np.ndarray = field(default_factory=lambda: np.zeros(0))
     work_normal: np.ndarray = field(default_factory=lambda: np.zeros(0))
     max_floquet_real: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    accuracy: np.ndarray | None = None  # loop-energy vs harmonic-work mismatch (-)
     completed: bool = False
     failed: bool = False
     message: str = ""
@@ -74,6 +86,39 @@ class Branch:
     stats: dict[str, Any] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)
     label: str = ""
+
+    def __post_init__(self) -> None:
+        self.stable = np.asarray(self.stable, dtype=bool)
+        if self.stability is None or np.size(self.stability) != self.stable.size:
+            # a record without verdicts (older files): stable or unstable as stored
+            self.stability = self.stable.astype(np.int8)
+        self.stability = np.asarray(self.stability, dtype=np.int8)
+        if self.out_rms is None or np.shape(self.out_rms) != np.shape(self.out_amp):
+            # older files: from the stored output harmonics (Q0^2 + sum (Qc^2 + Qs^2) / 2)
+            w = np.concatenate([[1.0] if h == 0 else [0.5, 0.5] for h in self.harmonics])
+            oh = np.asarray(self.out_harm, dtype=float)
+            self.out_rms = (
+                np.sqrt(np.einsum("h,ihj->ij", w, oh**2))
+                if oh.ndim == 3 and oh.shape[1] == w.size
+                else np.zeros_like(np.asarray(self.out_amp, dtype=float))
+            )
+        if self.accuracy is None or np.size(self.accuracy) != self.stable.size:
+            self.accuracy = np.full(self.stable.size, np.nan)  # not computed (older files)
+        self.accuracy = np.asarray(self.accuracy, dtype=float)
+
+    @property
+    def unstable(self) -> np.ndarray:
+        """(n_points,) bool: Hill found an exponent with a positive real part."""
+        return self.stability == 0
+
+    @property
+    def unknown(self) -> np.ndarray:
+        """(n_points,) bool: stability not determined (off, solver failure, count check)."""
+        return self.stability < 0
+
+    def stability_name(self, i: int) -> str:
+        """"stable", "unstable" or "unknown" at point ``i``."""
+        return ("unknown", "unstable", "stable")[int(self.stability[i]) + 1]
 
     @property
     def n_points(self) -> int:
@@ -85,19 +130,48 @@ class Branch:
             return -1
         return int(np.argmax(self.out_amp[:, output]))
 
+    def _argmax(self, values: np.ndarray, output: int) -> int:
+        return int(np.argmax(values[:, output])) if self.n_points else -1
+
+    def peak_inside(self, i: int) -> bool:
+        """True if point ``i`` is a maximum inside the band, not a band end (a peak reached)."""
+        return 0 < i < self.n_points - 1
+
     def summary(self, output: int = 0) -> dict[str, Any]:
-        """The numbers the CLI prints for this curve (amplitudes in the model's length unit)."""
+        """The numbers the CLI prints for this curve (amplitudes in the model's length unit).
+
+        Three peaks, each at its own frequency: ``peak_*`` the largest
+        ``|y(t)|`` over the period, ``h1_*`` the largest harmonic-1 amplitude,
+        ``rms_*`` the largest RMS over the period; ``peak_reached`` (and
+        ``h1_peak_reached``) is False when that maximum lies at a band end (the
+        curve is still rising there: not a resonance peak).
+        """
         i = self.peak(output)
+        j = self._argmax(self.out_h1, output)
+        k = self._argmax(self.out_rms, output)
+
+        def at(arr, n):
+            return float(arr[n]) if n >= 0 else None
+
         return dict(
             level=self.level,
-            peak_frequency_hz=float(self.freq_hz[i]) if i >= 0 else None,
+            peak_frequency_hz=at(self.freq_hz, i),
             peak_amplitude=float(self.out_amp[i, output]) if i >= 0 else None,
-            h1_amplitude=float(self.out_h1[i, output]) if i >= 0 else None,
+            peak_reached=self.peak_inside(i) if i >= 0 else None,
+            h1_peak_frequency_hz=at(self.freq_hz, j),
+            h1_amplitude=float(self.out_h1[j, output]) if j >= 0 else None,
+            h1_peak_reached=self.peak_inside(j) if j >= 0 else None,
+            rms_peak_frequency_hz=at(self.freq_hz, k),
+            rms_amplitude=float(self.out_rms[k, output]) if k >= 0 else None,
             peak_stable=bool(self.stable[i]) if i >= 0 else None,
+            peak_stability=self.stability_name(i) if i >= 0 else None,
             n_points=self.n_points,
-            n_unstable=int(np.sum(~self.stable)),
+            n_unstable=int(np.sum(self.unstable)),
+            n_stability_unknown=int(np.sum(self.unknown)),
             wall_s=round(float(self.timings.get("total", 0.0)), 4),
             energy_residual_max=float(np.max(self.energy_residual)) if self.n_points else None,
+            accuracy_max=_nanmax(self.accuracy),
+            accuracy_warning=self.stats.get("accuracy_warning") or None,
             newton_its=int(np.sum(self.newton_its)),
             completed=self.completed,
             failed=self.failed,
@@ -133,7 +207,7 @@ class Branch:
 
         with h5py.File(path, "r") as h:
             a = h.attrs
-            kw: dict[str, Any] = {name: h[name][()] for name in _ARRAYS}
+            kw: dict[str, Any] = {name: h[name][()] for name in _ARRAYS if name in h}
             kw["stable"] = kw["stable"].astype(bool)
             return cls(
                 level=float(a["level"]),
@@ -156,9 +230,9 @@ class Branch:
         """One row per point: frequency, stability, per-output amplitudes, energies."""
         from ..io import write_text
 
-        cols = ["freq_hz", "stable", "newton_its", "energy_residual"]
+        cols = ["freq_hz", "stable", "stability", "newton_its", "energy_residual", "accuracy"]
         for nm in self.output_names:
-            cols += [f"{nm}_amp_{unit}", f"{nm}_h1_{unit}"]
+            cols += [f"{nm}_amp_{unit}", f"{nm}_h1_{unit}", f"{nm}_rms_{unit}"]
         cols += [
             "friction_energy_j",
             "viscous_energy_j",
@@ -173,13 +247,16 @@ class Branch:
             row = [
                 f"{self.freq_hz[i]:.9g}",
                 str(int(self.stable[i])),
+                self.stability_name(i),
                 str(int(self.newton_its[i])),
                 f"{self.energy_residual[i]:.3e}",
+                f"{self.accuracy[i]:.3e}",
             ]
             for j in range(len(self.output_names)):
                 row += [
                     f"{self.out_amp[i, j] * unit_scale:.9g}",
                     f"{self.out_h1[i, j] * unit_scale:.9g}",
+                    f"{self.out_rms[i, j] * unit_scale:.9g}",
                 ]
             counts = (
                 np.bincount(self.status[i].astype(int), minlength=4)
@@ -194,6 +271,11 @@ class Branch:
             row += [str(int(c)) for c in counts[:4]]
             lines.append(",".join(row))
         return write_text(path, "\n".join(lines) + "\n")
+
+
+def _nanmax(a: np.ndarray) -> float | None:
+    a = np.asarray(a, dtype=float)
+    return float(np.nanmax(a)) if a.size and np.isfinite(a).any() else None
 
 
 def arc_length(

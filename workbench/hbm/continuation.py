@@ -28,12 +28,13 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import InputError, check_range
-from .balance import HarmonicBalance, observation
+from .balance import Evaluation, HarmonicBalance, observation
 from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
-from .fourier import Fourier
+from .fourier import Fourier, default_nt
 from .options import SolverOptions
-from .stability import Stability, hill_arpack, hill_dense
+from .stability import UNKNOWN, Stability, hill_arpack, hill_dense
+from .stability import unknown as stability_unknown
 from .system import System
 
 log = logging.getLogger(__name__)
@@ -61,6 +62,7 @@ class _Recorder:
         shapes = dict(
             out_amp=(0, n_out),
             out_h1=(0, n_out),
+            out_rms=(0, n_out),
             out_harm=(0, nh, n_out),
             status=(0, n_el),
             friction_energy=(0, n_el),
@@ -73,6 +75,7 @@ class _Recorder:
             else:
                 out[k] = np.zeros(shapes.get(k, (0,)))
         out["stable"] = out["stable"].astype(bool)
+        out["stability"] = out["stability"].astype(np.int8)
         out["status"] = out["status"].astype(np.int8)
         out["newton_its"] = out["newton_its"].astype(int)
         return out
@@ -134,7 +137,8 @@ def frequency_response(
     band_s = (w1 - w0) / w0
     rec = _Recorder()
     timings = dict(setup=time.perf_counter() - t_start, stability=0.0, post=0.0)
-    state = dict(xi=1e-300, n=0)
+    # loop state: largest solution norm, points, Hill's ARPACK start vector and dense blocks
+    state = dict(xi=1e-300, n=0, hill_v0=None, parts=None, hill_k=None)
     message, failed, completed = "", False, False
 
     from ..log import progress_bar
@@ -146,7 +150,8 @@ def frequency_response(
 
     def record(x: np.ndarray, w: float, its: int) -> None:
         t0 = time.perf_counter()
-        pd = hb.point_data(x, w, opts.n_fine)
+        ev = hb.evaluate(x, w)
+        pd = hb.point_data(ev, n_fine=opts.n_fine)
         timings["post"] += time.perf_counter() - t0
         if pd.lost_contact:
             raise _Stop(
@@ -155,19 +160,23 @@ def frequency_response(
                 "singular state); lower the excitation or raise the preload",
                 failed=True,
             )
-        mr, stable = np.nan, True
         if opts.stability:
             t0 = time.perf_counter()
-            st = _stability(hb, corr, x, w, opts)
+            st = _stability(hb, corr, ev, opts, state["hill_v0"], state)
+            state["hill_v0"] = st.start
             timings["stability"] += time.perf_counter() - t0
-            mr, stable = st.max_real, st.stable
+        else:
+            st = stability_unknown("stability off")
         rec.add(
             freq_hz=w / TWO_PI,
-            stable=stable,
+            stable=st.stable,
+            stability=st.verdict,
             newton_its=its,
             energy_residual=pd.energy_residual,
+            accuracy=pd.accuracy,
             out_amp=pd.out_amp,
             out_h1=pd.out_h1,
+            out_rms=pd.out_rms,
             out_harm=pd.out_harm,
             status=pd.status,
             friction_energy=pd.friction_energy,
@@ -176,7 +185,7 @@ def frequency_response(
             work_visc=pd.work_visc,
             work_friction=pd.work_friction,
             work_normal=pd.work_normal,
-            max_floquet_real=mr,
+            max_floquet_real=st.max_real,
         )
         xd = x / u_ref
         if fourier.has_dc:
@@ -221,7 +230,8 @@ def frequency_response(
     try:
         if opts.refine_peak and len(rec.rows["freq_hz"]) >= 3:
             t0 = time.perf_counter()
-            _refine_peak(hb, corr, opts, rec, record)
+            _refine_peak(hb, corr, opts, rec, record, "out_amp")
+            _refine_peak(hb, corr, opts, rec, record, "out_h1")
             timings["peak"] = time.perf_counter() - t0
     except _Stop as stop:  # a lost contact found while refining: report, keep the branch
         message = message or str(stop)
@@ -241,6 +251,9 @@ def frequency_response(
     st["t_per_residual"] = st["t_residual"] / max(st["n_residual"], 1)
     st["t_per_jacobian"] = (st["t_jacobian"] + 0.0) / max(st["n_jacobian"], 1)
     st["t_per_factor"] = st["t_factor"] / max(st["n_factor"], 1)
+    st["accuracy_warning"] = _accuracy_warning(fourier, arrays, opts)
+    if st["accuracy_warning"]:
+        log.warning("%s%s", f"{label}: " if label else "", st["accuracy_warning"])
     from ..config import record_to_dict
 
     return Branch(
@@ -259,6 +272,26 @@ def frequency_response(
         label=label,
         **arrays,
     )
+
+
+def _accuracy_warning(fourier: Fourier, arrays: dict, opts: SolverOptions) -> str:
+    """The accuracy warning of a branch ("" if none): nt small, or the indicator too large."""
+    out = []
+    hmax = max(fourier.harmonics)
+    if fourier.nt < 8 * hmax:
+        out.append(
+            f"nt = {fourier.nt} samples per period is few for harmonics up to {hmax} "
+            f"(at least {8 * hmax}; the default is {default_nt(fourier.harmonics)})"
+        )
+    acc = np.asarray(arrays.get("accuracy", []), dtype=float)
+    if acc.size and np.nanmax(acc, initial=0.0) > opts.accuracy_tol:
+        i = int(np.nanargmax(acc))
+        out.append(
+            f"the loop energy and the harmonic work of the contacts differ by "
+            f"{acc[i]:.2g} of the excitation work at f = {arrays['freq_hz'][i]:.6g} Hz "
+            f"(accuracy_tol {opts.accuracy_tol:g}): raise nt (and the harmonics)"
+        )
+    return "; ".join(out)
 
 
 def _ramp_level(hb: HarmonicBalance, corr: Corrector, w: float, level: float):
@@ -293,19 +326,27 @@ def _ramp_level(hb: HarmonicBalance, corr: Corrector, w: float, level: float):
 
 
 def _refine_peak(
-    hb: HarmonicBalance, corr: Corrector, opts: SolverOptions, rec: _Recorder, record
+    hb: HarmonicBalance,
+    corr: Corrector,
+    opts: SolverOptions,
+    rec: _Recorder,
+    record,
+    key: str = "out_amp",
 ) -> None:
-    """Search for the largest output amplitude around the largest computed one.
+    """Search for the largest ``key`` of output 0 around the largest computed one.
 
-    Where the branch is single-valued around the peak (frequency increasing
-    through the two neighbours on each side), the amplitude is sampled at
-    seven frequencies between the outer neighbours (friction makes the top
-    of the curve kinked, so it may have local maxima), then a golden-section
-    search refines around the best sample. Each trial is a corrector solve at
-    fixed frequency from the interpolated branch. The best trial is recorded
-    and inserted in frequency order.
+    ``key``: "out_amp" (the largest ``|y(t)|`` over the period) or "out_h1"
+    (the harmonic-1 amplitude): each has its own peak frequency. Where the
+    branch is single-valued around the peak (frequency increasing through
+    the two neighbours on each side), the value is sampled at seven
+    frequencies between the outer neighbours (friction makes the top of the
+    curve kinked, so it may have local maxima), then a golden-section search
+    refines around the best sample until the bracket is narrower than
+    ``peak_ftol`` (relative) or ``peak_iterations`` are spent. Each trial is a
+    corrector solve at fixed frequency from the interpolated branch. The
+    best trial is recorded and inserted in frequency order.
     """
-    amp = np.array([a[0] for a in rec.rows["out_amp"]])
+    amp = np.array([a[0] for a in rec.rows[key]])
     f = np.array(rec.rows["freq_hz"])
     i = int(np.argmax(amp))
     lo, hi = max(i - 2, 0), min(i + 2, len(f) - 1)
@@ -329,8 +370,8 @@ def _refine_peak(
             if not r.converged:
                 cache[fq] = (-np.inf, r.x, r.its)
             else:
-                a = float(hb.point_data(r.x, TWO_PI * fq, opts.n_fine).out_amp[0])
-                cache[fq] = (a, r.x, r.its)
+                pd = hb.point_data(r.x, TWO_PI * fq, n_fine=opts.n_fine)
+                cache[fq] = (float(getattr(pd, key)[0]), r.x, r.its)
         return cache[fq][0]
 
     grid = np.linspace(f[lo], f[hi], 9)[1:-1]
@@ -344,6 +385,8 @@ def _refine_peak(
     g = (np.sqrt(5) - 1) / 2
     c, d = b - g * (b - a), a + g * (b - a)
     for _ in range(opts.peak_iterations):
+        if b - a <= opts.peak_ftol * 0.5 * (a + b):
+            break
         if value(c) > value(d):
             b, d = d, c
             c = b - g * (b - a)
@@ -356,30 +399,48 @@ def _refine_peak(
         return
     record(xb, TWO_PI * fq, its)
     pos = int(np.searchsorted(f[lo : hi + 1], fq)) + lo  # keep frequency order there
-    for key in rec.rows:
-        rec.rows[key].insert(pos, rec.rows[key].pop())
+    for name in rec.rows:
+        rec.rows[name].insert(pos, rec.rows[name].pop())
 
 
-def _stability(hb: HarmonicBalance, corr: Corrector, x: np.ndarray, w: float, opts: SolverOptions):
+def _stability(
+    hb: HarmonicBalance,
+    corr: Corrector,
+    ev: Evaluation,
+    opts: SolverOptions,
+    v0: np.ndarray | None = None,
+    hill_parts: dict | None = None,
+) -> Stability:
+    """Hill's verdict at the evaluation ``ev`` of a solution; ``v0`` the previous ARPACK vector;
+    ``hill_parts`` a dict holding the branch's :class:`HillParts` (built on first use)."""
+    hill_parts = {} if hill_parts is None else hill_parts
+    x, w = ev.x, ev.omega
     size = 2 * hb.lin.n_z * hb.fourier.nh
-    hb.residual(x, w)
     if size <= opts.hill_dense_limit:
-        d0, d1, d2 = hb.hill_dense(w)
-        return hill_dense(d0, d1, d2, w, opts.unstable_tol)
+        if hill_parts.get("parts") is None:
+            hill_parts["parts"] = hb.hill_parts()
+        d0, d1, d2 = hb.hill_dense(ev, hill_parts["parts"])
+        return hill_dense(d0, d1, d2, w, hb.fourier.harmonics, opts.unstable_tol)
     lu = corr.factor(x / corr.u_ref, w / corr.w_ref)
     refine = 1 if lu.dtype == np.float32 else 0
-    size, op = hb.hill_shift_invert(w, lambda b: lu.solve(b, refine=refine))
+    size, op = hb.hill_shift_invert(lu.ev, lambda b: lu.solve(b, refine=refine))
     try:
         st = hill_arpack(
-            size, op, w, opts.n_floquet, opts.unstable_tol, v0=getattr(hb, "_hill_v0", None)
+            size,
+            op,
+            w,
+            hb.fourier.harmonics,
+            max(opts.n_floquet, hill_parts.get("hill_k") or 0),
+            opts.unstable_tol,
+            v0=v0,
+            n_max=opts.n_floquet_max,
         )
     except Exception as e:  # noqa: BLE001 - ARPACK breakdown: say so, keep the point
         log.warning("Hill's method failed at %.6g Hz (%s): stability unknown", w / TWO_PI, e)
-        corr.stats["n_stability_failed"] = corr.stats.get("n_stability_failed", 0) + 1
-        return Stability(np.zeros(0, complex), float("nan"), True, "arpack", converged=False)
-    if not st.converged:
-        corr.stats["n_stability_failed"] = corr.stats.get("n_stability_failed", 0) + 1
-    hb._hill_v0 = st.start
+        st = stability_unknown(f"ARPACK failed: {e}", "arpack")
+    hill_parts["hill_k"] = st.n_exp
+    if st.verdict == UNKNOWN:
+        corr.stats["n_stability_unknown"] = corr.stats.get("n_stability_unknown", 0) + 1
     return st
 
 
@@ -509,8 +570,17 @@ def _arclength(
             theta = (w1 - w) / (res.omega - w)
             guess = x + theta * (res.x - x)
             end = corr.solve_natural(guess, w1)
-            if end.converged:
-                record(end.x, w1, end.its)
+            if not end.converged:  # once more with a fresh LU
+                corr.force_refresh = True
+                end = corr.solve_natural(guess, w1)
+            if not end.converged:
+                raise _Stop(
+                    f"the branch passed the band end but the corrector failed at exactly "
+                    f"f = {w1 / TWO_PI:.6g} Hz (SNES: {end.reason}); the last point kept is "
+                    f"at {w / TWO_PI:.6g} Hz",
+                    failed=True,
+                )
+            record(end.x, w1, end.its)
             return True
         if res.omega < w0 * (1 - 1e-12):
             raise _Stop(

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from .balance import HarmonicBalance
+from .balance import Evaluation, HarmonicBalance
 from .options import SolverOptions
 
 _ids = itertools.count()
@@ -103,27 +103,25 @@ class Factorization:
     def __init__(
         self,
         hb: HarmonicBalance,
-        xs: np.ndarray,
-        ws: float,
-        u_ref: float,
-        w_ref: float,
+        ev: Evaluation,
         jw: np.ndarray,
         single: bool = False,
         reduce: bool = True,
     ):
-        x, w = xs * u_ref, ws * w_ref
-        self.hb, self.x, self.w = hb, x, w
+        """``ev``: the evaluation at the state (:meth:`HarmonicBalance.evaluate`); ``jw``:
+        ``dr/dw`` there in the caller's scaling (the bordering column)."""
+        self.hb, self.ev = hb, ev
         self.N = hb.N
         self.P: np.ndarray | None = None
         self.E: np.ndarray | None = None
         nonlin, anchored = (
-            hb.element_classes()
+            hb.element_classes(ev)
             if hb.n_el and hb.space == "condensed"
             else (np.arange(hb.n_el), np.zeros(0, int))
         )
         if reduce and hb.space == "condensed" and nonlin.size < hb.n_el:
             C1, c1 = (
-                hb.jacobian_columns(x, w, nonlin)
+                hb.jacobian_columns(ev, nonlin)
                 if nonlin.size
                 else (np.zeros((self.N, 0)), np.zeros(0, int))
             )
@@ -133,7 +131,7 @@ class Factorization:
             M = self.E[self.P].copy()
             M.flat[:: M.shape[0] + 1] += 1.0
         else:
-            M = hb.dense_jacobian(x, w, dtype=np.float32 if single else np.float64)
+            M = hb.dense_jacobian(ev, dtype=np.float32 if single else np.float64)
         self.size = M.shape[0]
         dtype = np.float32 if single else np.float64
         self.lu = sla.lu_factor(M.astype(dtype), check_finite=False) if self.size else None
@@ -152,7 +150,7 @@ class Factorization:
         """``J^-1 b``; ``refine`` steps of iterative refinement with the exact product."""
         x = self._solve_once(b)
         for _ in range(refine):
-            r = b - self.hb.jvp(self.x, self.w, x)
+            r = b - self.hb.jvp(self.ev, x)
             x = x + self._solve_once(r)
         return x
 
@@ -197,24 +195,36 @@ class Corrector:
         )
         self._hist: list[float] = []
         self._own_ok = False
+        # the last evaluation (SNES asks for the residual, then the Jacobian at the same point)
+        self.ev: Evaluation | None = None
 
     # -- scaled problem --------------------------------------------------------
+    def evaluation(self, xs: np.ndarray, ws: float) -> Evaluation:
+        """The evaluation at scaled (xs, ws): the last one if it is there, else a new one."""
+        x, w = np.asarray(xs, dtype=float) * self.u_ref, float(ws) * self.w_ref
+        ev = self.ev
+        if not (
+            ev is not None
+            and ev.omega == w
+            and ev.level == self.hb.level
+            and np.array_equal(ev.x, x)
+        ):
+            ev = self.hb.evaluate(x, w)
+            self.ev = ev
+        return ev
+
     def _res(self, xs: np.ndarray, ws: float) -> np.ndarray:
-        r = self.hb.residual(xs * self.u_ref, ws * self.w_ref) / self.u_ref
-        return r
+        return self.evaluation(xs, ws).r / self.u_ref
 
     def _jw(self, xs: np.ndarray, ws: float) -> np.ndarray:
-        return self.hb.residual_omega(xs * self.u_ref, ws * self.w_ref) * (self.w_ref / self.u_ref)
+        return self.hb.residual_omega(self.evaluation(xs, ws)) * (self.w_ref / self.u_ref)
 
     def factor(self, xs: np.ndarray, ws: float) -> Factorization:
         """Assemble and factor dr/dx at (xs, ws); keep it as the preconditioner."""
         t0 = time.perf_counter()
         self.lu = Factorization(
             self.hb,
-            xs,
-            ws,
-            self.u_ref,
-            self.w_ref,
+            self.evaluation(xs, ws),
             self._jw(xs, ws),
             single=self.single,
             reduce=self.opts.reduce_factor,
@@ -310,13 +320,14 @@ class Corrector:
                     v = X.getArray(readonly=True)
                     xs, ws = state["x"], state["w"]
                     out = Y.getArray()
+                    ev = corr.evaluation(xs, ws)
                     if kind == "arclength":
-                        jv = corr.hb.jvp(xs * corr.u_ref, ws * corr.w_ref, v[:-1])
+                        jv = corr.hb.jvp(ev, v[:-1])
                         out[:-1] = jv + state["jw"] * v[-1]
                         cx, cw = state["row"]
                         out[-1] = cx @ v[:-1] + cw * v[-1]
                     else:
-                        out[:] = corr.hb.jvp(xs * corr.u_ref, ws * corr.w_ref, v)
+                        out[:] = corr.hb.jvp(ev, v)
 
             class Pre:
                 def setUp(self, pc):

@@ -48,6 +48,12 @@ class Fourier:
     kind: np.ndarray = field(init=False, repr=False)  # (nh,) 0 = Q0, 1 = cos, 2 = sin
     E: np.ndarray = field(init=False, repr=False)  # (nt, nh) synthesis
     P: np.ndarray = field(init=False, repr=False)  # (nh, nt) analysis
+    # each harmonic k >= 1: (k, cos index, sin index), and the same as index arrays
+    _pairs: tuple[tuple[int, int, int], ...] = field(init=False, repr=False)
+    ic: np.ndarray = field(init=False, repr=False)  # cos component of each pair
+    is_: np.ndarray = field(init=False, repr=False)  # sin component of each pair
+    pair_k: np.ndarray = field(init=False, repr=False)  # harmonic of each pair
+    pair_row: np.ndarray = field(init=False, repr=False)  # its position in ``harmonics``
 
     def __post_init__(self) -> None:
         try:
@@ -184,6 +190,15 @@ class Fourier:
         B = np.where(self.kind == 0, 1.0, np.where(self.kind == 1, np.cos(ph), np.sin(ph)))
         refined = np.abs(np.einsum("mh,hm->m", B, X))
         return np.maximum(refined, np.abs(x[j, np.arange(x.shape[1])]))
+
+    def rms(self, X: np.ndarray) -> np.ndarray:
+        """RMS over the period of each signal in X (nh, m).
+
+        ``sqrt(Q0^2 + sum_k (Qc_k^2 + Qs_k^2) / 2)`` (Parseval), same unit as X.
+        """
+        X = np.asarray(X, dtype=float)
+        w = np.where(self.kind == 0, 1.0, 0.5).reshape((-1,) + (1,) * (X.ndim - 1))
+        return np.sqrt(np.sum(w * X**2, axis=0))
 
     def h1_amplitude(self, X: np.ndarray) -> np.ndarray:
         """``sqrt(Qc_1^2 + Qs_1^2)`` of each signal (0 if harmonic 1 is not in the list)."""

@@ -84,11 +84,32 @@ class SolverOptions:
         lo_open=True,
     )
     max_points: int = param(3000, "points per curve before stopping", lo=2)
-    refine_peak: bool = param(True, "golden-section search for the peak between its neighbours")
-    peak_iterations: int = param(8, "golden-section iterations of the peak search", lo=1, hi=60)
+    refine_peak: bool = param(
+        True,
+        "golden-section search of the max |y(t)| peak and of the harmonic-1 peak, each at its "
+        "own frequency",
+    )
+    peak_iterations: int = param(
+        30, "largest number of golden-section iterations of each peak search", lo=1, hi=100
+    )
+    peak_ftol: float = param(
+        1e-4,
+        "each peak search stops when its frequency bracket is narrower than this (relative)",
+        lo=0.0,
+        lo_open=True,
+        hi=0.1,
+    )
     # stability
     stability: bool = param(True, "Hill's method at every point")
-    n_floquet: int = param(6, "Floquet exponents computed by ARPACK (large systems)", lo=1, hi=200)
+    n_floquet: int = param(
+        6, "Floquet exponents ARPACK starts with (large systems)", lo=1, hi=200
+    )
+    n_floquet_max: int = param(
+        48,
+        "Floquet exponents ARPACK may grow to while covering |lambda| <= w/2 (else unknown)",
+        lo=1,
+        hi=2000,
+    )
     hill_dense_limit: int = param(
         700, "Hill state size up to which all exponents are computed", lo=0
     )
@@ -109,6 +130,13 @@ class SolverOptions:
         "mean-position anchor of bodies held only by contacts, relative to kt (0: none)",
         lo=0.0,
         hi=1.0,
+    )
+    accuracy_tol: float = param(
+        1e-2,
+        "warn when the loop-energy vs harmonic-work mismatch exceeds this fraction of the "
+        "excitation work at some point (nt or harmonics too few for the contact loops)",
+        lo=0.0,
+        lo_open=True,
     )
     n_fine: int = param(256, "samples per period for the peak of the output", lo=16)
 

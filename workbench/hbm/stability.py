@@ -1,4 +1,4 @@
-"""Stability of a periodic solution by Hill's method.
+"""Stability of a periodic solution by Hill's method, three-valued.
 
 A perturbation ``dq = exp(lambda t) p(t)`` of a periodic solution, with
 ``p`` on the same harmonics, solves Hill's quadratic eigenproblem
@@ -8,18 +8,38 @@ A perturbation ``dq = exp(lambda t) p(t)`` of a periodic solution, with
     Delta1 = C (x) I + 2 M (x) nabla,   Delta2 = M (x) I,
 
 (``nabla`` the time derivative on the harmonics, ``D`` the contact
-Jacobian from the AFT). The truncated problem repeats every Floquet
-exponent shifted by ``i k w``; the representatives kept are those with
-``|Im lambda| <= w / 2``. The solution is unstable when one of them has a
-positive real part (above ``tol * w``).
+Jacobian from the AFT). Exponents in 1/s.
+
+Which exponents are Floquet exponents. The exact problem repeats every
+exponent shifted by ``i k w`` with its eigenvector shifted by ``-k``
+harmonics; the truncated problem keeps only some of the copies, and those
+whose eigenvectors lean on the highest retained harmonics are truncation
+artefacts (for a non-smooth friction Jacobian they can even have a large
+positive real part). The exponents kept are those whose eigenvectors are
+the most centred (after Lazarus and Thomas, 2010): with the eigenvector's
+content written on complex exponentials ``exp(i k w t)``, ``k = -H..H``,
+its mean harmonic index ``kbar`` (weights ``|p_k|^2``) is closest to 0.
+Each family of copies has exactly one member with ``|kbar| < 1/2`` when
+the truncation is adequate, so the count check is: exactly ``2 n`` of the
+``2 n nh`` eigenvalues have ``|kbar| < 1/2`` (``n`` the coordinates).
+
+Verdicts (:data:`STABLE`, :data:`UNSTABLE`, :data:`UNKNOWN`): unstable when
+a kept exponent has ``Re > tol * w``; stable when none has and the
+selection is trustworthy (count check passed, eigen-solver converged);
+unknown otherwise (and when stability is not computed at all).
 
 Small problems are solved densely (state size ``2 n nh`` up to
 ``dense_limit``). Larger ones use ARPACK in shift-invert mode about 0 on
 the state-space form ``A z = lambda B z``: each application of
 ``A^-1 B`` needs ``Delta0^-1``, which the Woodbury identity gives from the
 LU of the (much smaller) harmonic balance Jacobian the corrector already
-works with; the exponents nearest 0 are those that cross into the right
-half-plane at a fold or a Neimark-Sacker bifurcation of the response.
+works with. A fold (``lambda = 0``), a Neimark-Sacker pair (``lambda = +-i
+nu``, ``|nu| <= w/2`` for its centred copy) and a period doubling
+(``lambda = i w/2``) all cross the imaginary axis inside the disc
+``|lambda| <= w/2``; the sparse path therefore asks for more exponents
+until the disc is covered (the farthest exponent found lies beyond
+``w/2``), up to a cap: a point whose disc is not covered and where no
+unstable exponent was found is ``unknown``.
 """
 
 from __future__ import annotations
@@ -29,91 +49,242 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+STABLE, UNSTABLE, UNKNOWN = 1, 0, -1
+VERDICT_NAMES = {STABLE: "stable", UNSTABLE: "unstable", UNKNOWN: "unknown"}
+
 
 @dataclass
 class Stability:
     """Floquet exponents kept for one solution (1/s) and the verdict."""
 
-    exponents: np.ndarray  # complex, |Im| <= w/2
-    max_real: float  # largest real part (1/s)
-    stable: bool
-    method: str  # "dense" | "arpack"
-    converged: bool = True
+    exponents: np.ndarray  # complex, the centred exponents kept
+    max_real: float  # largest real part among them (1/s), nan if none
+    verdict: int  # STABLE, UNSTABLE or UNKNOWN
+    method: str  # "dense" | "arpack" | "none"
+    converged: bool = True  # the eigen-solver converged
+    count_ok: bool = True  # the centred-eigenvector count check passed
+    note: str = ""  # why the verdict is unknown
     start: np.ndarray | None = None  # ARPACK start vector for the next point
+    n_exp: int = 0  # exponents ARPACK was asked for (the next point starts there)
+
+    @property
+    def stable(self) -> bool:
+        """True only for a trustworthy stable verdict."""
+        return self.verdict == STABLE
 
 
-def select(lam: np.ndarray, omega: float) -> np.ndarray:
-    """The exponents with ``|Im| <= w/2`` (all of them if none qualifies)."""
-    lam = np.asarray(lam)
-    lam = lam[np.isfinite(lam)]
-    keep = lam[np.abs(lam.imag) <= 0.5 * omega * (1 + 1e-9)]
-    return keep if keep.size else lam
+def unknown(note: str, method: str = "none") -> Stability:
+    """The record of a point whose stability was not determined."""
+    return Stability(np.zeros(0, complex), float("nan"), UNKNOWN, method, False, False, note)
+
+
+def mean_harmonic(
+    P: np.ndarray, harmonics: tuple[int, ...], moments: bool = False
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Mean harmonic index ``kbar`` of each eigenvector (and its RMS index if ``moments``).
+
+    ``P`` (nh, n, m) complex: m eigenvectors on the real Fourier layout of
+    :mod:`.fourier` (``Q0, Qc_1, Qs_1, ...``). The content at
+    ``exp(+- i k w t)`` is ``(Qc -+ i Qs) / 2``; ``kbar = sum k |c_k|^2 /
+    sum |c_k|^2`` over ``k = -H..H``.
+    """
+    num = np.zeros(P.shape[-1])
+    sq = np.zeros(P.shape[-1])
+    den = np.zeros(P.shape[-1])
+    i = 0
+    for h in harmonics:
+        if h == 0:
+            den += np.sum(np.abs(P[i]) ** 2, axis=0)
+            i += 1
+            continue
+        pc, ps = P[i], P[i + 1]
+        wp = 0.25 * np.sum(np.abs(pc - 1j * ps) ** 2, axis=0)
+        wm = 0.25 * np.sum(np.abs(pc + 1j * ps) ** 2, axis=0)
+        num += h * (wp - wm)
+        sq += h * h * (wp + wm)
+        den += wp + wm
+        i += 2
+    den = np.maximum(den, 1e-300)
+    if moments:
+        return num / den, np.sqrt(sq / den)
+    return num / den
+
+
+def _verdict(
+    lam: np.ndarray,
+    omega: float,
+    tol: float,
+    trusted: bool,
+    note: str,
+    found_counts: bool = False,
+    **kw,
+):
+    """STABLE/UNSTABLE when ``trusted``; otherwise UNKNOWN, unless ``found_counts``
+    (each exponent in ``lam`` is a genuine centred one) and one of them is unstable."""
+    mr = float(np.max(lam.real)) if lam.size else float("nan")
+    if lam.size and mr > tol * omega and (trusted or found_counts):
+        v = UNSTABLE
+    elif trusted:  # (the sparse path may find no centred exponent inside its disc)
+        v = STABLE
+    else:
+        v = UNKNOWN
+    return Stability(exponents=lam, max_real=mr, verdict=v, note=note if v == UNKNOWN else "", **kw)
+
+
+def select_centred(
+    lam: np.ndarray, P: np.ndarray, harmonics: tuple[int, ...], n_keep: int
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The ``n_keep`` exponents with the most centred eigenvectors, and the count check.
+
+    ``lam`` (m,) in 1/s, ``P`` (nh, n, m) the eigenvectors.
+    Ranked by the RMS harmonic index ``sqrt(sum k^2 |c_k|^2 / sum |c_k|^2)``:
+    within a family of copies it is smallest for the copy with
+    ``|kbar| <= 1/2`` (shifting by ``m`` adds ``m^2 - 2 m kbar``), and the
+    spurious exponents of the truncation lean on the highest harmonics, so
+    they rank last. The count check passes when every kept eigenvector is
+    the centred copy of its family (``|kbar| < 1/2``: then no two kept
+    exponents are copies of each other, so the kept set has one exponent
+    per family) and the cut after ``n_keep`` does not split a tie (a
+    complex-conjugate pair). Returns (kept exponents, their RMS index,
+    check passed).
+    """
+    kb, rms = mean_harmonic(P, harmonics, moments=True)
+    ok = np.isfinite(lam)
+    key = np.where(ok, rms, np.inf)
+    order = np.argsort(key, kind="stable")
+    keep = order[:n_keep]
+    count_ok = bool(np.all(ok[keep]) and np.all(np.abs(kb[keep]) < 0.5))
+    if order.size > n_keep:
+        last, nxt = key[order[n_keep - 1]], key[order[n_keep]]
+        count_ok = count_ok and nxt - last > 1e-6 * max(abs(last), 1e-3)
+    return lam[keep], rms[keep], count_ok
+
+
+def hill_eig(d0: np.ndarray, d1: np.ndarray, d2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every eigenvalue (1/s) and eigenvector ``p`` (first half of ``[p; lambda p]``)."""
+    n_all = d0.shape[0]
+    lu = sla.lu_factor(d2, check_finite=False)
+    A = np.zeros((2 * n_all, 2 * n_all))
+    A[:n_all, n_all:] = np.eye(n_all)
+    A[n_all:, :n_all] = -sla.lu_solve(lu, d0, check_finite=False)
+    A[n_all:, n_all:] = -sla.lu_solve(lu, d1, check_finite=False)
+    lam, vec = np.linalg.eig(A)
+    return lam, vec
 
 
 def hill_dense(
-    d0: np.ndarray, d1: np.ndarray, d2: np.ndarray, omega: float, tol: float = 1e-6
+    d0: np.ndarray,
+    d1: np.ndarray,
+    d2: np.ndarray,
+    omega: float,
+    harmonics: tuple[int, ...],
+    tol: float = 1e-6,
 ) -> Stability:
-    """All Hill exponents of a small problem from its dense matrices."""
-    n = d0.shape[0]
-    lu = sla.lu_factor(d2, check_finite=False)
-    A = np.zeros((2 * n, 2 * n))
-    A[:n, n:] = np.eye(n)
-    A[n:, :n] = -sla.lu_solve(lu, d0, check_finite=False)
-    A[n:, n:] = -sla.lu_solve(lu, d1, check_finite=False)
-    lam = np.linalg.eigvals(A)
-    keep = select(lam, omega)
-    mr = float(np.max(keep.real)) if keep.size else -np.inf
-    return Stability(exponents=keep, max_real=mr, stable=mr <= tol * omega, method="dense")
+    """All Hill exponents of a small problem from its dense matrices; centred ones kept.
+
+    ``harmonics``: the harmonic list of the layout (``d0`` is ``(nh n, nh n)``,
+    harmonic-major, :mod:`.fourier`); ``omega`` in rad/s.
+    """
+    n_all = d0.shape[0]
+    lam, vec = hill_eig(d0, d1, d2)
+    nh = sum(1 if h == 0 else 2 for h in harmonics)
+    n = n_all // nh
+    P = vec[:n_all].reshape(nh, n, -1)
+    keep, _, count_ok = select_centred(lam, P, harmonics, 2 * n)
+    return _verdict(
+        keep,
+        omega,
+        tol,
+        count_ok,
+        "count check failed: the 2n most centred eigenvectors are not one clean set "
+        "(too few harmonics for this Jacobian?)",
+        method="dense",
+        converged=True,
+        count_ok=count_ok,
+    )
+
+
+def _centred(P: np.ndarray, harmonics: tuple[int, ...]) -> np.ndarray:
+    """Eigenvectors that are the centred copy of their family and do not lean on the top.
+
+    ``|kbar| < 1/2`` and an RMS harmonic index below half the highest harmonic.
+    """
+    kb, rms = mean_harmonic(P, harmonics, moments=True)
+    return (np.abs(kb) < 0.5) & (rms < 0.5 * max(harmonics))
 
 
 def hill_arpack(
     size: int,
     op,
     omega: float,
+    harmonics: tuple[int, ...],
     n_exp: int = 6,
     tol: float = 1e-6,
     seed: int = 0,
     v0: np.ndarray | None = None,
+    n_max: int = 60,
 ) -> Stability:
-    """The ``n_exp`` Hill exponents nearest 0 through ARPACK on ``A^-1 B`` (``op``).
+    """Hill exponents nearest 0 through ARPACK on ``A^-1 B`` (``op``), covering ``|lambda| <= w/2``.
 
-    ``v0``: a start vector, e.g. :attr:`Stability.start` of the previous point
-    of a branch (the Ritz vectors change little from one point to the next).
+    Starts with ``n_exp`` exponents (the previous point's final count, along a
+    branch) and doubles the count (up to ``n_max``)
+    until the farthest one found lies beyond ``w / 2``, so that every
+    exponent that can cross the imaginary axis (fold, Neimark-Sacker, period
+    doubling) is among those found; keeps those with centred eigenvectors
+    (``|kbar| < 1/2``). ``v0``: a start vector, e.g. :attr:`Stability.start`
+    of the previous point of a branch.
     """
     from scipy.sparse.linalg import ArpackNoConvergence, LinearOperator, eigs
 
     L = LinearOperator((size, size), matvec=op, dtype=float)
-    k = min(n_exp, size - 2)
+    nh = sum(1 if h == 0 else 2 for h in harmonics)
+    n = size // (2 * nh)
     if v0 is None or v0.shape != (size,) or not np.all(np.isfinite(v0)):
         v0 = np.random.default_rng(seed).standard_normal(size)
-    converged = True
-    try:
-        mu, vec = eigs(
-            L,
-            k=k,
-            which="LM",
-            v0=v0,
-            ncv=min(size - 1, max(2 * k + 1, 20)),
-            # Ritz values to 1e-6 (relative): Re(lambda) within 1e-6 |lambda| <= 1e-6 w / 2,
-            # below the threshold unstable_tol * w of the verdict
-            tol=1e-6,
-            maxiter=2000,
-        )
-        start = (vec.real + vec.imag).sum(axis=1)
-    except ArpackNoConvergence as e:
-        mu = e.eigenvalues
-        start = None
-        converged = False
-    keep_mu = np.abs(mu) > 0
-    mu = mu[keep_mu]
-    lam = 1.0 / mu
-    keep = select(lam, omega)
-    mr = float(np.max(keep.real)) if keep.size else -np.inf
-    return Stability(
-        exponents=keep,
-        max_real=mr,
-        stable=mr <= tol * omega,
+    k = min(n_exp, size - 2)
+    n_max = min(max(n_max, k), size - 2)
+    while True:
+        try:
+            mu, vec = eigs(
+                L,
+                k=k,
+                which="LM",
+                v0=v0,
+                ncv=min(size - 1, max(2 * k + 1, 20)),
+                # Ritz values to 1e-6 (relative): Re(lambda) within 1e-6 |lambda| <= 1e-6 w/2,
+                # below the threshold unstable_tol * w of the verdict
+                tol=1e-6,
+                maxiter=2000,
+            )
+        except ArpackNoConvergence as e:
+            mu, vec = e.eigenvalues, e.eigenvectors
+            nz = np.abs(mu) > 0
+            lam = 1.0 / mu[nz]
+            P = vec[: nh * n][:, nz].reshape(nh, n, -1) if vec.size else np.zeros((nh, n, 0))
+            keep = lam[_centred(P, harmonics)]
+            return _verdict(
+                keep, omega, tol, False, "ARPACK did not converge", method="arpack",
+                converged=False, count_ok=False,
+            )
+        nz = np.abs(mu) > 0
+        lam = 1.0 / mu[nz]
+        covered = lam.size > 0 and np.max(np.abs(lam)) > 0.5 * omega
+        if covered or k >= n_max:
+            break
+        k = min(2 * k, n_max)
+    start = (vec.real + vec.imag).sum(axis=1)
+    P = vec[: nh * n][:, nz].reshape(nh, n, -1)
+    keep = lam[_centred(P, harmonics)]
+    return _verdict(
+        keep,
+        omega,
+        tol,
+        covered,
+        f"the {k} exponents nearest 0 (cap n_floquet_max) do not cover |lambda| <= w/2",
+        found_counts=True,
         method="arpack",
-        converged=converged,
+        converged=True,
+        count_ok=covered,
         start=start,
+        n_exp=k,
     )

@@ -3,13 +3,16 @@
 Newmark's average-acceleration rule (``beta = 1/4``, ``gamma = 1/2``,
 unconditionally stable, no numerical damping) with a fixed step of
 ``T / steps_per_period``; at each step the contact law of
-:func:`workbench.contact.law.law_step` (the same predictor/corrector as the
-harmonic balance) is solved with Newton's method and its consistent
-tangent. Periods are run until the state at the end of a period repeats
-the previous one within ``tol`` (relative) twice in a row; the last period
-is the steady periodic response.
+the law's own ``step`` (:mod:`workbench.contact.laws`, the same function
+the harmonic balance marches) is solved with Newton's method and its
+consistent tangent ``df/du``; a step whose Newton does not converge (60
+iterations, correction below 1e-12 of the displacement) is rejected: the
+integration stops with a :class:`SolveError` naming the time. Periods are
+run until the state at the end of a period repeats the previous one within
+``tol`` (relative) twice in a row; the last period is the steady periodic
+response.
 
-Compiled with numba for dense matrices: meant for the small models used to
+Compiled with numba (one kernel per law) for dense matrices: meant for the small models used to
 check the harmonic balance (a few dozen DOFs), at chosen frequencies.
 """
 
@@ -18,9 +21,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
-from ..contact.law import accept_step, law_step
+from ..contact import get_law
+from ..contact.march import specialise
 from ..errors import InputError, SolveError, check_int, check_range
 from .balance import excitation_vector, observation
 from .fourier import Fourier
@@ -45,8 +48,11 @@ class TimeResponse:
     v_end: np.ndarray
 
 
-@njit(cache=True)
-def _newmark(
+step = None  # the law's step: bound per law by contact.march.specialise
+
+
+def _newmark_py(
+    ns,
     M,
     C,
     K,
@@ -56,7 +62,6 @@ def _newmark(
     kt2,
     kn,
     n0,
-    law,
     fs,
     fc,
     fsn,
@@ -72,19 +77,26 @@ def _newmark(
     efric,
 ):
     n_el = Wd.shape[0] // 3
+    n = M.shape[0]
     T = 2.0 * np.pi / omega
     dt = T / spp
     beta, gamma = 0.25, 0.5
     Khat = K + (gamma / (beta * dt)) * C + (1.0 / (beta * dt * dt)) * M
     q = q0.copy()
     v = v0.copy()
-    state = np.zeros((n_el, 4))
+    state = np.zeros((n_el, ns))
+    s_new = np.zeros((n_el, ns))
     f = np.zeros((n_el, 3))
     Kt = np.zeros((n_el, 3, 3))
+    Fs = np.zeros((3, ns))
+    Su = np.zeros((ns, 3))
+    Ss = np.zeros((ns, ns))
     flags = np.zeros(n_el, dtype=np.int64)
     u = (Wd @ q).reshape(n_el, 3)
-    law_step(u, state, mu, kt1, kt2, kn, n0, law, f, Kt, flags)
-    accept_step(u, f, state)
+    for e in range(n_el):
+        step(u[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], False,
+             f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
+    state[:, :] = s_new
     fcont = Wd.T @ f.ravel()
     a = np.linalg.solve(M, fs + fc - C @ v - K @ q - fcont)
     q_prev_end = q.copy()
@@ -114,9 +126,12 @@ def _newmark(
             qn = q + dt * v + 0.5 * dt * dt * a
             u_old = (Wd @ q).reshape(n_el, 3)
             f_old = f.copy()
+            converged = n == 0
             for _ in range(60):
                 u = (Wd @ qn).reshape(n_el, 3)
-                law_step(u, state, mu, kt1, kt2, kn, n0, law, f, Kt, flags)
+                for e in range(n_el):
+                    flags[e] = step(u[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], True,
+                                    f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
                 r = Khat @ qn + Wd.T @ f.ravel() - rhs
                 Jt = Khat.copy()
                 Kb = np.zeros((3 * n_el, 3 * n_el))
@@ -127,10 +142,15 @@ def _newmark(
                 Jt += Wd.T @ Kb @ Wd
                 dq = np.linalg.solve(Jt, -r)
                 qn = qn + dq
-                if np.abs(dq).max() <= 1e-13 * (np.abs(qn).max() + 1e-300):
+                if np.abs(dq).max() <= 1e-12 * (np.abs(qn).max() + 1e-300):
+                    converged = True
                     break
+            if not converged:
+                return p, False, q, v, t
             u = (Wd @ qn).reshape(n_el, 3)
-            law_step(u, state, mu, kt1, kt2, kn, n0, law, f, Kt, flags)
+            for e in range(n_el):
+                flags[e] = step(u[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], False,
+                                f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
             an = (qn - q) / (beta * dt * dt) - v / (beta * dt) - (0.5 / beta - 1.0) * a
             vn = v + dt * ((1.0 - gamma) * a + gamma * an)
             for e in range(n_el):
@@ -142,7 +162,7 @@ def _newmark(
                     slip_cnt[e] += 1
                 elif flags[e] == 2:
                     sep_cnt[e] += 1
-            accept_step(u, f, state)
+            state[:, :] = s_new
             q, v, a = qn, vn, an
             qbuf[j] = q
             qmax = max(qmax, np.abs(q).max())
@@ -153,10 +173,10 @@ def _newmark(
         if err <= tol:
             n_ok += 1
             if n_ok >= 2:
-                return p + 1, True, q, v
+                return p + 1, True, q, v, -1.0
         else:
             n_ok = 0
-    return max_periods, False, q, v
+    return max_periods, False, q, v, -1.0
 
 
 def time_response(
@@ -201,11 +221,11 @@ def time_response(
     if el is None:
         Wd = np.zeros((0, n))
         arrs = [np.zeros(0)] * 5
-        law = 0
+        law = get_law("decoupled")
     else:
         Wd = el.W.toarray()
         arrs = [el.mu, el.kt1, el.kt2, el.kn, el.n0]
-        law = el.law_code
+        law = get_law(el.law)
     n_el = Wd.shape[0] // 3
     qb = np.zeros((spp, n))
     slip = np.zeros(n_el, dtype=np.int64)
@@ -213,13 +233,13 @@ def time_response(
     ef = np.zeros(n_el)
     q0 = np.zeros(n) if q0 is None else np.asarray(q0, dtype=float).copy()
     v0 = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).copy()
-    periods, ok, qe, ve = _newmark(
+    periods, ok, qe, ve, t_bad = specialise(_newmark_py, law, "_newmark")(
+        law.n_state,
         system.M,
         C,
         system.K,
         Wd,
         *arrs,
-        law,
         system.total_static_force(),
         F.real.copy(),
         -F.imag.copy(),
@@ -256,6 +276,13 @@ def time_response(
         q_end=qe,
         v_end=ve,
     )
+    if t_bad >= 0:
+        raise SolveError(
+            f"time integration at {freq:.6g} Hz: Newton did not converge at the step "
+            f"t = {t_bad:.6g} s (period {periods + 1}); the step is rejected (more "
+            "steps_per_period may help)",
+            partial=res,
+        )
     if not ok:
         raise SolveError(
             f"time integration at {freq:.6g} Hz did not reach a periodic response "

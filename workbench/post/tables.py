@@ -410,7 +410,7 @@ def cases_table(results: StudyResults) -> Table:
             c.case_id, c.damper, c.family, f"{c.force_n:g}", c.variant,
             fixed(_nan(s["peak_frequency_hz"]), 7), fixed(_nan(amp), 6),
             fixed(_nan(amp) / c.force_n, 6), sci(_nan(s["friction_energy_mj"]), 4),
-            "" if s["peak_stable"] is None else ("yes" if s["peak_stable"] else "no"),
+            _stability_cell(s),
             str(s["n_points"]), str(s["n_unstable"]),
             "yes" if s["completed"] else ("failed" if c.branch.failed else "no"),
             f"{s['wall_s']:.3g}", s["message"],
@@ -432,6 +432,14 @@ def sweep_table(curves: Sequence[SweepCurve]) -> Table:
                          "failed" if sc.failed[k] else ("yes" if sc.stable[k] else "no")))
     return Table(("damper", "family", "force (N)", opt, "peak frequency (Hz)",
                   "peak amplitude (mm)", "friction energy (mJ)", "peak stable"), tuple(rows))
+
+
+def _stability_cell(s: dict) -> str:
+    """yes / no / unknown (Hill not computed or not trusted) for the peak point."""
+    v = s.get("peak_stability")
+    if v is not None:
+        return {"stable": "yes", "unstable": "no"}.get(v, "unknown")
+    return "" if s["peak_stable"] is None else ("yes" if s["peak_stable"] else "no")
 
 
 def _nan(v: Any) -> float:

@@ -1,10 +1,11 @@
 """Frequency response curves of the harmonic balance (matplotlib, no pyplot state).
 
 :func:`plot_frf` draws one curve per excitation level (stable parts solid,
-unstable parts dashed, the peak marked); :func:`plot_status_map` draws the
-contact status of every element along a branch (frequency on x, element on
-y), in the manner of the contact-status charts of "On the efficiency of a
-conical under-platform damper for turbines". Both take branches
+unstable parts dashed, parts of unknown stability dotted grey, the peak
+marked); :func:`plot_status_map` draws the contact status of every element
+along a branch (frequency on x, element on y), in the manner of the
+contact-status charts of "On the efficiency of a conical under-platform
+damper for turbines". Both take branches
 (:class:`workbench.hbm.Branch`) and write a PNG.
 """
 
@@ -22,7 +23,7 @@ STATUS_LABELS = ("stuck", "stick-slip", "partial separation", "full separation")
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(start, stop) index ranges of equal values in a boolean array (stop inclusive + 1)."""
+    """(start, stop) index ranges of equal values in an array (stop exclusive)."""
     if mask.size == 0:
         return []
     edges = np.flatnonzero(np.diff(mask.astype(int))) + 1
@@ -66,10 +67,18 @@ def plot_frf(
         a = b.out_amp[:, output] * unit_scale / (force if per_level and force else 1.0)
         label = f"F = {force:.3g} N" + (" (failed)" if b.failed else "")
         first = True
-        for s, e in _runs(b.stable):
+        verdict = np.asarray(b.stability)
+        for s, e in _runs(verdict):
             seg = slice(max(s - 1, 0), e)  # join the segments
-            ax.plot(f[seg], a[seg], "-" if b.stable[s] else "--", color=col, lw=1.4,
-                    label=label if first else None)
+            v = int(verdict[s])
+            ax.plot(
+                f[seg],
+                a[seg],
+                {1: "-", 0: "--"}.get(v, ":"),
+                color=col if v >= 0 else "0.55",
+                lw=1.4 if v >= 0 else 1.8,
+                label=label if first else None,
+            )
             first = False
         ax.plot(f, a, ".", color=col, ms=2.5)  # the computed points
         i = b.peak(output)
@@ -84,12 +93,15 @@ def plot_frf(
         readable_log(ax, "y")
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(ylab)
-    ax.set_title(title or "frequency response (solid: stable, dashed: unstable)")
+    ax.set_title(
+        title or "frequency response (solid: stable, dashed: unstable, dotted grey: unknown)"
+    )
     if any(b.n_points for b in branches):
         from matplotlib.lines import Line2D
 
         handles, labels = ax.get_legend_handles_labels()
         handles += [Line2D([], [], color="0.3", ls="--", label="unstable (Hill)"),
+                    Line2D([], [], color="0.55", ls=":", lw=1.8, label="stability unknown"),
                     Line2D([], [], color="0.3", ls="none", marker="o", label="peak")]
         ax.legend(handles=handles, loc="best", title="excitation force")
     return save_figure(fig, path)

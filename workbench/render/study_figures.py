@@ -112,9 +112,18 @@ def _failed_suffix(case: CaseResult) -> str:
 
 def _draw_branch(ax, x: np.ndarray, y: np.ndarray, stable: np.ndarray, *, color: str,
                  ls_stable: str = "-", ls_unstable: str = "--", lw: float = 1.6,
-                 band: bool = False, label: str | None = None) -> None:
-    """A curve drawn solid where stable and ``ls_unstable`` (or a grey band) where not."""
+                 band: bool = False, label: str | None = None,
+                 unknown: np.ndarray | None = None) -> None:
+    """A curve drawn solid where stable and ``ls_unstable`` (or a grey band) where not;
+    points of unknown stability (``unknown``, Hill not computed or not trusted) dotted grey."""
     first = True
+    if unknown is not None and np.any(unknown):
+        unk = np.asarray(unknown, dtype=bool)
+        for sl, u in _runs(~unk):
+            if not u:
+                j = slice(max(sl.start - 1, 0), min(sl.stop + 1, x.size))
+                ax.plot(x[j], y[j], color="0.55", lw=lw + 0.3, ls=":", zorder=3)
+        y = np.where(unk, np.nan, y)
     for sl, ok in _runs(stable):
         if not ok and band:
             ax.plot(x[sl], y[sl], **UNSTABLE_BAND)
@@ -195,11 +204,11 @@ def plot_receptances(cases: Sequence[CaseResult], path: str | Path, *,
         x, y = c.freq_hz, c.receptance_mm_per_n
         col = colors.get(float(c.force_n), "k")
         if x.size:
-            _draw_branch(ax, x, y, c.stable, color=col,
+            _draw_branch(ax, x, y, c.stable, unknown=c.branch.unknown, color=col,
                          label=_flabel(c.force_n) + _failed_suffix(c))
             _mark_failure(ax, c, x, y, col)
             peaks.append(float(np.nanmax(y)))
-            any_unstable |= bool(np.any(~c.stable))
+            any_unstable |= bool(np.any(c.branch.unstable))
         else:
             ax.plot([], [], color=col, label=_flabel(c.force_n) + " (no point)")
     if _wants_log(peaks):
@@ -238,12 +247,13 @@ def plot_receptance_overlay(cases: Sequence[CaseResult], path: str | Path, *,
             x, y = c.freq_hz, c.receptance_mm_per_n
             if not x.size:
                 continue
-            _draw_branch(ax, x, y, c.stable, color=col, ls_stable=ls, band=True, lw=1.4,
+            _draw_branch(ax, x, y, c.stable, unknown=c.branch.unknown, color=col, ls_stable=ls,
+                         band=True, lw=1.4,
                          label=(d + (" (failed)" if failed else "")) if first else None)
             _mark_failure(ax, c, x, y, col)
             first = False
             peaks.append(float(np.nanmax(y)))
-            any_unstable |= bool(np.any(~c.stable))
+            any_unstable |= bool(np.any(c.branch.unstable))
     if _wants_log(peaks):
         ax.set_yscale("log")
         _readable_log(ax, "y")
@@ -274,7 +284,7 @@ def plot_sweep_receptances(cases: Sequence[CaseResult], option: str, path: str |
         x, y = c.freq_hz, c.receptance_mm_per_n
         if not x.size:
             continue
-        _draw_branch(ax, x, y, c.stable, color=colors[v],
+        _draw_branch(ax, x, y, c.stable, unknown=c.branch.unknown, color=colors[v],
                      label=f"{option} = {v:g} {unit}".rstrip() + _failed_suffix(c))
         _mark_failure(ax, c, x, y, colors[v])
         peaks.append(float(np.nanmax(y)))

@@ -1,0 +1,219 @@
+"""One contact march for every law: periods of samples until the state repeats.
+
+:func:`march` runs a law (:mod:`workbench.contact.laws`) over periods of
+given displacement samples, from rest, until the state at the end of a
+period repeats the previous period's end to ``tol`` (relative, per state
+entry, to its largest magnitude over the period), at least two periods and
+at most ``max_periods`` (a warning when the cap is hit: the loop returned
+is then the last one marched, not a converged one). It returns the force
+samples of the last period, their harmonics ``P @ f`` and, exactly, their
+derivative with respect to the harmonics of the displacement: the chain
+rule through every sample of every period marched,
+
+    df_j/dU = Fu E_j + Fs ds_{j-1}/dU,   ds_j/dU = Su E_j + Ss ds_{j-1}/dU.
+
+The march is compiled once per law (:func:`specialise`: the law's ``step``
+is a global of its own copy of the kernel, cached on disk by numba under
+the name ``_march_<law>``).
+"""
+
+from __future__ import annotations
+
+import logging
+import types
+
+import numpy as np
+from numba import njit
+
+from .laws import Law, get_law
+
+log = logging.getLogger(__name__)
+
+TOL = 1e-10  # relative repeat tolerance of the end-of-period state
+MAX_PERIODS = 200
+_warned: set[str] = set()
+
+
+def specialise(py_func, law: Law, prefix: str):
+    """A numba-compiled copy of ``py_func`` whose global ``step`` is ``law.step``.
+
+    Each law gets its own function object named ``<prefix>_<law>`` (so numba
+    caches one compiled kernel per law on disk); ``py_func`` refers to the
+    law only through the global name ``step``. Memoised per (function, law).
+    """
+    key = (py_func.__qualname__, law.name)
+    if key not in _kernels:
+        g = dict(py_func.__globals__)
+        g["step"] = law.step
+        name = f"{prefix}_{law.name}"
+        fn = types.FunctionType(py_func.__code__, g, name, py_func.__defaults__)
+        fn.__qualname__ = name
+        _kernels[key] = njit(cache=True)(fn)
+    return _kernels[key]
+
+
+_kernels: dict = {}
+step = None  # the law's step: bound per law by specialise()
+
+
+def _march_py(
+    ns, u, E, P, mu, kt1, kt2, kn, n0, want_jac, tol, max_periods,
+    f, F, J, n_slip, n_sep, contact, periods, converged,
+):  # fmt: skip
+    n_el, nt, _ = u.shape
+    nh = E.shape[1]
+    m = 3 * nh
+    s = np.zeros(ns)
+    s_new = np.zeros(ns)
+    s_start = np.zeros(ns)
+    scale = np.zeros(ns)
+    ds = np.zeros((ns, m))
+    ds_new = np.zeros((ns, m))
+    Fu = np.zeros((3, 3))
+    Fs = np.zeros((3, ns))
+    Su = np.zeros((ns, 3))
+    Ss = np.zeros((ns, ns))
+    fj = np.zeros(3)
+    dfb = np.zeros((3, nt, m)) if want_jac else np.zeros((3, 1, m))
+    flags = np.zeros(nt, dtype=np.int64)
+    for e in range(n_el):
+        s[:] = 0.0
+        ds[:, :] = 0.0
+        p = 0
+        same = False
+        while p < max_periods:
+            s_start[:] = s
+            scale[:] = 0.0
+            for j in range(nt):
+                flags[j] = step(
+                    u[e, j], s, mu[e], kt1[e], kt2[e], kn[e], n0[e], want_jac,
+                    fj, s_new, Fu, Fs, Su, Ss,
+                )  # fmt: skip
+                f[e, j, 0] = fj[0]
+                f[e, j, 1] = fj[1]
+                f[e, j, 2] = fj[2]
+                if want_jac:
+                    # the law's derivatives are sparse: only their non-zero entries are used
+                    for a in range(3):
+                        for c in range(m):
+                            dfb[a, j, c] = 0.0
+                        for k in range(ns):
+                            fak = Fs[a, k]
+                            if fak != 0.0:
+                                for c in range(m):
+                                    dfb[a, j, c] += fak * ds[k, c]
+                        for b in range(3):
+                            fab = Fu[a, b]
+                            if fab != 0.0:
+                                for h in range(nh):
+                                    dfb[a, j, b * nh + h] += fab * E[j, h]
+                    for a in range(ns):
+                        for c in range(m):
+                            ds_new[a, c] = 0.0
+                        for k in range(ns):
+                            sak = Ss[a, k]
+                            if sak != 0.0:
+                                for c in range(m):
+                                    ds_new[a, c] += sak * ds[k, c]
+                        for b in range(3):
+                            sab = Su[a, b]
+                            if sab != 0.0:
+                                for h in range(nh):
+                                    ds_new[a, b * nh + h] += sab * E[j, h]
+                    for a in range(ns):
+                        for c in range(m):
+                            ds[a, c] = ds_new[a, c]
+                for k in range(ns):
+                    s[k] = s_new[k]
+                    if abs(s[k]) > scale[k]:
+                        scale[k] = abs(s[k])
+            p += 1
+            if p >= 2:
+                same = True
+                for k in range(ns):
+                    if abs(s[k] - s_start[k]) > tol * scale[k]:
+                        same = False
+                if same:
+                    break
+        periods[e] = p
+        converged[e] = same
+        ns_ = 0
+        nsep = 0
+        for j in range(nt):
+            contact[e, j] = flags[j] != 2
+            if flags[j] == 1:
+                ns_ += 1
+            elif flags[j] == 2:
+                nsep += 1
+        n_slip[e] = ns_
+        n_sep[e] = nsep
+        F[e] = np.dot(P, f[e]).T
+        if want_jac:
+            for a in range(3):
+                J[e, a] = np.dot(P, dfb[a])
+
+
+def march(
+    u: np.ndarray,
+    E: np.ndarray,
+    P: np.ndarray,
+    mu: np.ndarray,
+    kt1: np.ndarray,
+    kt2: np.ndarray,
+    kn: np.ndarray,
+    n0: np.ndarray,
+    law: str = "decoupled",
+    want_jac: bool = True,
+    tol: float = TOL,
+    max_periods: int = MAX_PERIODS,
+) -> dict[str, np.ndarray]:
+    """March ``law`` over periods of samples ``u`` (n_el, nt, 3) in metres until it repeats.
+
+    ``E`` (nt, nh) synthesises the samples from harmonics, ``P`` (nh, nt)
+    analyses them (see :mod:`workbench.hbm.fourier`). Returns a dict with
+
+    * ``f`` (n_el, nt, 3): force samples ``[T1, T2, -N]`` (N) of the last period;
+    * ``F`` (n_el, 3, nh): their harmonics ``P @ f``;
+    * ``J`` (n_el, 3, nh, 3, nh): ``dF[e, a, h] / dU[e, b, c]`` (N/m), or None;
+    * ``n_slip``, ``n_sep`` (n_el,): samples slipping / separated in that period;
+    * ``contact`` (n_el, nt): the contact is closed (N > 0) at each sample;
+    * ``periods`` (n_el,): periods marched; ``converged`` (n_el,): the state repeated
+      within ``tol`` (False: the cap was hit, the last period is returned).
+    """
+    lw = get_law(law)
+    u = np.ascontiguousarray(u, dtype=float)
+    n_el, nt, _ = u.shape
+    nh = E.shape[1]
+    f = np.zeros((n_el, nt, 3))
+    F = np.zeros((n_el, 3, nh))
+    J = np.zeros((n_el, 3, nh, 3 * nh)) if want_jac else np.zeros((1, 3, 1, 3))
+    n_slip = np.zeros(n_el, dtype=np.int64)
+    n_sep = np.zeros(n_el, dtype=np.int64)
+    contact = np.zeros((n_el, nt), dtype=np.bool_)
+    periods = np.zeros(n_el, dtype=np.int64)
+    converged = np.zeros(n_el, dtype=np.bool_)
+    arrs = [np.ascontiguousarray(a, dtype=float) for a in (mu, kt1, kt2, kn, n0)]
+    specialise(_march_py, lw, "_march")(
+        lw.n_state, u,
+        np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(P, dtype=float),
+        *arrs, bool(want_jac), float(tol), int(max_periods),
+        f, F, J, n_slip, n_sep, contact, periods, converged,
+    )  # fmt: skip
+    capped = int(np.sum(~converged))
+    if capped and law not in _warned:
+        _warned.add(law)
+        log.warning(
+            "contact march (%s law): %d of %d elements did not repeat within %d periods "
+            "(tol %g); their last period is used (warned once per law)",
+            law, capped, n_el, max_periods, tol,
+        )  # fmt: skip
+    return dict(
+        f=f,
+        F=F,
+        J=J.reshape(n_el, 3, nh, 3, nh) if want_jac else None,
+        n_slip=n_slip,
+        n_sep=n_sep,
+        contact=contact,
+        periods=periods,
+        converged=converged,
+    )
