@@ -148,6 +148,8 @@ def main(argv: list[str] | None = None) -> int:
     except WorkbenchError as e:
         if args.debug:
             log.exception("failed")
+        if isinstance(getattr(e, "summary", None), dict):  # what was done is still shown
+            _emit(e.summary, args.json, t0)
         sys.stderr.write(f"{prog}: error: {e}\n")
         return e.exit_code
     except KeyboardInterrupt:
@@ -170,16 +172,23 @@ def main(argv: list[str] | None = None) -> int:
             sys.stderr.flush()
             MPI.COMM_WORLD.Abort(1)
         return 1
-    if summary is None:
-        summary = {}
+    _emit(summary, args.json, t0)
+    return 0
+
+
+def _emit(summary: dict[str, Any] | None, as_json: bool, t0: float) -> None:
+    """Print a command's summary on stdout (JSON or human-readable; rank 0 only)."""
+    from .. import log as wlog
+
+    summary = {} if summary is None else summary
     summary.setdefault("wall_s", round(time.perf_counter() - t0, 3))
     if wlog.mpi_rank() != 0:
-        return 0  # under mpirun the summary is printed once, by rank 0
-    if args.json:
+        return  # under mpirun the summary is printed once, by rank 0
+    if as_json:
         sys.stdout.write(json.dumps(summary, indent=2, default=to_jsonable) + "\n")
     else:
         sys.stdout.write(_human(json.loads(json.dumps(summary, default=to_jsonable))) + "\n")
-    return 0
+    sys.stdout.flush()
 
 
 def num(text: str) -> float | str:

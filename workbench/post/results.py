@@ -92,6 +92,37 @@ class CaseResult:
         return self.branch.peak(self.output)
 
     @property
+    def peak_covered(self) -> bool:
+        """True when the curve shows its resonance peak.
+
+        That is: the curve reached the end of its band without failing and
+        its highest point lies strictly inside it. Otherwise (a curve
+        stopped by ``max-points``, a failed solve, a band that ends before
+        the resonance) the highest computed point is only a *lower bound*
+        of the peak, and :meth:`summary` reports it as such, never as the
+        peak.
+        """
+        i, n = self.peak_index, self.branch.n_points
+        return bool(self.branch.completed and not self.branch.failed and 0 < i < n - 1)
+
+    def peak_note(self) -> str:
+        """Why the peak is a lower bound ("" when it is covered)."""
+        if self.peak_covered:
+            return ""
+        i = self.peak_index
+        if i < 0:
+            return "no point computed: no peak"
+        f, a = float(self.freq_hz[i]), float(self.amp_mm[i])
+        if self.branch.completed and not self.branch.failed:
+            where = (f"the highest point is at the band edge ({f:.6g} Hz): the resonance lies "
+                     "outside the band")
+        else:
+            why = self.branch.message or "stopped early"
+            where = (f"the curve stopped at {float(self.freq_hz[-1]):.6g} Hz before covering its "
+                     f"resonance ({why})")
+        return f"{where}; {a:.4g} mm is only a lower bound of the peak"
+
+    @property
     def energy_mj(self) -> np.ndarray:
         """(n_points, n_pairs) friction energy per cycle of every pair, mJ."""
         return self.branch.friction_energy * 1e3
@@ -108,7 +139,8 @@ class CaseResult:
     def summary(self) -> dict[str, Any]:
         """The per-case numbers of the study's JSON summary and tables."""
         i = self.peak_index
-        ok = i >= 0
+        covered = self.peak_covered
+        ok = i >= 0 and covered  # a peak the curve did not reach is never reported as one
         out = {
             "case": self.case_id, "damper": self.damper, "phase_deg": self.phase_deg,
             "family": self.family, "force_n": self.force_n, "variant": self.variant,
@@ -118,7 +150,11 @@ class CaseResult:
             "peak_stable": bool(self.stable[i]) if ok else None,
             "n_points": self.branch.n_points,
             "n_unstable": int(np.sum(~self.stable)),
-            "energy_residual_max": float(np.max(self.branch.energy_residual)) if ok else None,
+            "energy_residual_max": (float(np.max(self.branch.energy_residual)) if i >= 0
+                                    else None),
+            "peak_covered": covered,
+            "peak_lower_bound_mm": float(self.amp_mm[i]) if i >= 0 and not covered else None,
+            "peak_note": self.peak_note(),
             "completed": bool(self.branch.completed),
             "message": self.branch.message,
             "wall_s": round(float(self.timings.get("hbm", self.branch.timings.get("total", 0.0))),
@@ -208,6 +244,10 @@ class StudyResults:
 
     def summaries(self) -> list[dict[str, Any]]:
         return [c.summary() for c in self.cases]
+
+    def uncovered(self) -> list[CaseResult]:
+        """The cases whose curve did not cover the resonance peak (failed ones included)."""
+        return [c for c in self.cases if not c.peak_covered]
 
     def save(self, path: str | Path) -> Path:
         """All cases in one HDF5 file: /cases/<case_id>/... plus attributes."""
