@@ -44,6 +44,36 @@ def upd():
     return run_upd
 
 
+TINY = ROOT / "tests" / "studies" / "tiny.toml"
+
+
+@pytest.fixture(scope="session")
+def tiny_resumed(tmp_path_factory):
+    """The tiny study, SIGKILLed after its first case and resumed: (folder, JSON summary).
+
+    Shared by the resume test and the study-state tests (xdist group "resume"), which
+    work on copies of the folder so that they reuse its meshes and reduced models.
+    """
+    import signal
+    import time
+
+    out = tmp_path_factory.mktemp("tiny") / "tiny"
+    cmd = [sys.executable, "-m", "workbench.cli.main", "study", str(TINY), "--out", str(out),
+           "-q"]
+    p = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    cases = out / "cache" / "cases"
+    t0 = time.time()
+    while not (cases.is_dir() and list(cases.glob("*.h5"))):  # the first case is finished
+        assert p.poll() is None and time.time() - t0 < 600, "study ended before a case"
+        time.sleep(0.05)
+    p.send_signal(signal.SIGKILL)  # no chance to clean up: atomic writes must do
+    p.wait()
+    r = run_upd("study", TINY, "--out", out, "--json")
+    assert r.code == 0, r
+    assert "TqdmWarning" not in r.err  # a normal run is clean
+    return out, r.json
+
+
 def image_std(png: str | Path) -> float:
     """Pixel standard deviation of an image (0 for a blank one)."""
     import matplotlib.image as mpimg

@@ -139,8 +139,7 @@ class CaseResult:
     def summary(self) -> dict[str, Any]:
         """The per-case numbers of the study's JSON summary and tables."""
         i = self.peak_index
-        covered = self.peak_covered
-        ok = i >= 0 and covered  # a peak the curve did not reach is never reported as one
+        ok = i >= 0
         out = {
             "case": self.case_id, "damper": self.damper, "phase_deg": self.phase_deg,
             "family": self.family, "force_n": self.force_n, "variant": self.variant,
@@ -150,17 +149,27 @@ class CaseResult:
             "peak_stable": bool(self.stable[i]) if ok else None,
             "n_points": self.branch.n_points,
             "n_unstable": int(np.sum(~self.stable)),
-            "energy_residual_max": (float(np.max(self.branch.energy_residual)) if i >= 0
-                                    else None),
-            "peak_covered": covered,
-            "peak_lower_bound_mm": float(self.amp_mm[i]) if i >= 0 and not covered else None,
-            "peak_note": self.peak_note(),
+            "energy_residual_max": float(np.max(self.branch.energy_residual)) if ok else None,
             "completed": bool(self.branch.completed),
             "message": self.branch.message,
             "wall_s": round(float(self.timings.get("hbm", self.branch.timings.get("total", 0.0))),
                             3),
         }
         out.update({f"share_{k}": v for k, v in self.status_shares().items()})
+        out.update(self._peak_bound())
+        return out
+
+    def _peak_bound(self) -> dict[str, Any]:
+        """Summary keys saying whether the peak was reached; a peak the curve did not reach
+        is never reported as one: its values are None and its amplitude a lower bound."""
+        i, covered = self.peak_index, self.peak_covered
+        out: dict[str, Any] = {"peak_covered": covered, "peak_lower_bound_mm": None,
+                               "peak_note": self.peak_note()}
+        if not covered and i >= 0:
+            out["peak_lower_bound_mm"] = float(self.amp_mm[i])
+            for k in ("peak_frequency_hz", "peak_amplitude_mm", "friction_energy_mj",
+                      "peak_stable", "peak_stability"):
+                out[k] = None
         return out
 
     # ---- storage

@@ -130,7 +130,7 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
     with stage(timings, "geometry"):
         geom = load_geometry(case, out)
     if _older(gdir / "geometry.h5", t0):  # reused: its cost is the one of its first build
-        cached["geometry"] = float(sum(geom.timings_s.values()))
+        cached["geometry"] = float(sum((geom.stats.get("timings_s") or {}).values()))
     s = case.settings
     fe_dir = out / "cache" / "fe"
     reduced = {}
