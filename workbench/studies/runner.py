@@ -265,11 +265,7 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         log.info("%d of %d cases to compute (%d cached)%s", len(todo), len(cases),
                  len(cases) - len(todo), f", {len(mine)} on rank {rank}" if size > 1 else "")
     t_cases = time.perf_counter()
-    total = sum(_cost(c, prepared) for c in mine)
-    done = 0.0
-    # the bar's total is the exact sum of the steps (a rounded total made tqdm warn that it
-    # clamps the fraction when the last step went past it)
-    with progress_bar(f"{spec.name}: cases", total=total, unit="cost") as bar:
+    with progress_bar(f"{spec.name}: cases", total=len(mine), unit="case") as bar:
         for k, c in enumerate(mine):
             bar.set_postfix_str(f"{k + 1}/{len(mine)} {c.name}")
             res = solve_case(prepared[c.model_digest], c)
@@ -280,9 +276,7 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
                             res.branch.message, res.branch.n_points)
             elif not res.peak_covered:
                 log.warning("case %s: %s", c.name, res.peak_note())
-            step = min(_cost(c, prepared), total - done)
-            done += step
-            bar.update(step)
+            bar.update(1)
             if not bars_enabled():
                 log.info("case %d/%d done: %s (%d points, %.1f s)", k + 1, len(mine), c.name,
                          res.branch.n_points, res.timings["hbm"])
