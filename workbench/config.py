@@ -68,8 +68,9 @@ def check_field(f: dataclasses.Field, value: Any, where: str = "", typ: Any = No
     typ = f.type if typ is None else typ
     if m.get("choices"):
         return check_choice(name, value, m["choices"])
-    if typ in (int, "int", float, "float") and isinstance(value, str):
+    if typ in (int, "int", float, "float") and isinstance(value, str) and _numeric(value):
         # a quoted number in a parameter file is a typo, not a number: no silent coercion
+        # (other text falls through to the range check's "not a number")
         raise InputError(name, value, "a number" if typ in (float, "float") else
                          "a whole number", "a string; write it without quotes")
     if typ in (int, "int"):
@@ -89,6 +90,14 @@ def check_field(f: dataclasses.Field, value: Any, where: str = "", typ: Any = No
             raise InputError(name, value, "a string")
         return value
     return value
+
+
+def _numeric(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
 
 
 def validate(record: Any, where: str = "") -> None:

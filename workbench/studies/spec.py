@@ -328,8 +328,9 @@ def check_toml_type(o: Option, value: Any, where: str) -> None:
     command line, whose values are text, is parsed by :func:`check_option`.
     """
     if o.kind in ("floats", "ints", "strs"):
-        item = {"floats": ("numbers", (int, float)), "ints": ("whole numbers", (int,)),
-                "strs": ("strings", (str,))}[o.kind]
+        item = {"floats": ("numbers", (int, float), "a number"),
+                "ints": ("whole numbers", (int,), "a whole number"),
+                "strs": ("strings", (str,), "a string")}[o.kind]
         example = (f'["{value}"]' if o.kind == "strs" else f"[{value}]") \
             if isinstance(value, (str, int, float)) and not isinstance(value, bool) else \
             {"floats": "[180.0]", "ints": "[0, 1]", "strs": '["cone"]'}[o.kind]
@@ -338,7 +339,7 @@ def check_toml_type(o: Option, value: Any, where: str) -> None:
                              f"{example}", f"{_toml_type(value)} in {where}")
         for i, v in enumerate(value):
             if isinstance(v, bool) or not isinstance(v, item[1]):
-                raise InputError(f"{o.name}[{i}]", v, f"one of an array of {item[0]}",
+                raise InputError(f"{o.name}[{i}]", v, f"{item[2]} (each item of {o.name})",
                                  f"{_toml_type(v)} in {where}")
         return
     name, types = _TOML_TYPES[o.kind]
