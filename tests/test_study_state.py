@@ -156,7 +156,13 @@ def _wait_for(path: Path, text: str, p: subprocess.Popen, timeout: float = 120.0
 
 def test_curves_stopped_by_max_points_exit_3_with_lower_bounds(warm, tmp_path):
     out = _copy(warm, tmp_path / "s")
+    # half-written files of a killed run (atomic writes leave them only on SIGKILL)
+    stale = [out / "cache" / "cases" / ".0123.h5.abcd.part", out / "figures" / ".x.png.k.part",
+             out / "cache" / "geometry" / ".rig.1234.part.msh"]
+    for p in stale:
+        p.write_bytes(b"half")
     r = run_upd("study", TINY, "--out", out, "--json", "--max-points", "5")
+    assert not any(p.exists() for p in stale)  # cleaned at the next run
     assert r.code == 3, r
     err = r.err.strip().splitlines()[-1]
     assert err.startswith("upd study: error: 2 case(s) did not reach their resonance peak")
@@ -174,9 +180,9 @@ def test_curves_stopped_by_max_points_exit_3_with_lower_bounds(warm, tmp_path):
 def test_a_second_run_on_the_same_folder_is_refused_at_once(warm, tmp_path):
     out = _copy(warm, tmp_path / "s", drop_cases=True)
     log = tmp_path / "first.err"
-    with log.open("w") as fh:
-        first = subprocess.Popen([*CMD, "--out", str(out)], cwd=ROOT,
-                                 stdout=subprocess.DEVNULL, stderr=fh)
+    with log.open("w") as fh:  # with its progress bars, as a user sees it
+        first = subprocess.Popen([*CMD, "--out", str(out)], cwd=ROOT, stdout=subprocess.DEVNULL,
+                                 stderr=fh, env=dict(os.environ, UPD_NO_PROGRESS="0"))
     try:
         _wait_for(log, "model for cone", first)
         t0 = time.time()
@@ -191,6 +197,8 @@ def test_a_second_run_on_the_same_folder_is_refused_at_once(warm, tmp_path):
         if first.poll() is None:
             first.kill()
     assert not (out / LOCK_NAME).exists()
+    assert "cases:" in log.read_text()  # the bar was drawn ...
+    assert "TqdmWarning" not in log.read_text()  # ... without tqdm clamping its fraction
 
 
 def test_ctrl_c_during_the_curves_of_a_second_run(warm, tmp_path):
@@ -210,3 +218,21 @@ def test_ctrl_c_during_the_curves_of_a_second_run(warm, tmp_path):
     assert "upd study: interrupted; finished work is kept" in log.read_text()
     assert not (out / LOCK_NAME).exists()
     assert not list(out.rglob("*.part"))
+
+
+def test_a_corrupt_cache_file_is_rebuilt_with_a_warning(tmp_path, caplog, monkeypatch):
+    import logging
+
+    from workbench.fe.reduce import _load_if_current
+    from workbench.geometry.build import _reusable
+
+    monkeypatch.setattr(logging.getLogger("workbench"), "propagate", True)
+    bad = tmp_path / "rig_cb12_0123.h5"
+    bad.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 64)  # a truncated HDF5 file
+    assert _load_if_current(bad, "0123") is None
+    assert "unreadable; rebuilding" in caplog.text
+    caplog.clear()
+    geo = tmp_path / "geometry.h5"
+    geo.write_bytes(b"not hdf5")
+    assert _reusable(geo, "0123") is None
+    assert "unreadable" in caplog.text and "rebuilding" in caplog.text

@@ -78,6 +78,7 @@ def study_lock(out: Path) -> Iterator[None]:
     comm = _comm()
     if comm is None:
         with folder_lock(out):
+            remove_stale_parts(out)
             yield
         return
     with ExitStack() as stack:
@@ -85,12 +86,30 @@ def study_lock(out: Path) -> Iterator[None]:
         if comm.rank == 0:
             try:
                 stack.enter_context(folder_lock(out))
+                remove_stale_parts(out)
             except InputError as e:
                 err = (e.param, e.value, e.allowed, e.why)
         err = comm.bcast(err, root=0)
         if err is not None:
             raise InputError(*err)
         yield
+
+
+def remove_stale_parts(out: Path) -> int:
+    """Delete the half-written ``.*.part`` files a killed run left in a study folder.
+
+    Called with the folder's lock held, so no other run is writing them.
+    """
+    n = 0
+    for p in list(out.rglob(".*.part*")):
+        try:
+            p.unlink()
+            n += 1
+        except OSError:
+            pass
+    if n:
+        log.info("removed %d half-written file(s) left by an interrupted run", n)
+    return n
 
 
 def geometry_request(case: Case) -> dict[str, Any]:
