@@ -49,7 +49,8 @@ TINY = ROOT / "tests" / "studies" / "tiny.toml"
 
 @pytest.fixture(scope="session")
 def tiny_resumed(tmp_path_factory):
-    """The tiny study, SIGKILLed after its first case and resumed: (folder, JSON summary).
+    """The tiny study, SIGKILLed during its FE stage, run again and SIGKILLed after its
+    first case, then resumed: (folder, JSON summary of the last run).
 
     Shared by the resume test and the study-state tests (xdist group "resume"), which
     work on copies of the folder so that they reuse its meshes and reduced models.
@@ -58,19 +59,27 @@ def tiny_resumed(tmp_path_factory):
     import time
 
     out = tmp_path_factory.mktemp("tiny") / "tiny"
-    cmd = [sys.executable, "-m", "workbench.cli.main", "study", str(TINY), "--out", str(out),
-           "-q"]
-    p = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    cmd = [sys.executable, "-m", "workbench.cli.main", "study", str(TINY), "--out", str(out)]
+    log = out.parent / "killed.err"
+
+    def kill_when(ready) -> None:
+        with log.open("w") as fh:
+            p = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=fh)
+        t0 = time.time()
+        while not ready():
+            assert p.poll() is None and time.time() - t0 < 600, log.read_text()[-2000:]
+            time.sleep(0.05)
+        p.send_signal(signal.SIGKILL)  # no chance to clean up: atomic writes must do
+        p.wait()
+
+    # 1. during the FE stage (the reduction of the rig has started)
+    kill_when(lambda: "building the craig-bampton model" in log.read_text())
+    # 2. during the curves (the first case is finished)
     cases = out / "cache" / "cases"
-    t0 = time.time()
-    while not (cases.is_dir() and list(cases.glob("*.h5"))):  # the first case is finished
-        assert p.poll() is None and time.time() - t0 < 600, "study ended before a case"
-        time.sleep(0.05)
-    p.send_signal(signal.SIGKILL)  # no chance to clean up: atomic writes must do
-    p.wait()
+    kill_when(lambda: cases.is_dir() and any(cases.glob("*.h5")))
     r = run_upd("study", TINY, "--out", out, "--json")
     assert r.code == 0, r
-    assert "TqdmWarning" not in r.err  # a normal run is clean
+    assert "removing the stale lock" in r.err  # the killed runs' lock does not block
     return out, r.json
 
 

@@ -28,8 +28,6 @@ import os
 import re
 import sys
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -214,8 +212,7 @@ def main(argv: list[str] | None = None) -> int:
     prog = f"upd {args.command}"
     t0 = time.perf_counter()
     try:
-        with stdout_for_json_only(args.json):
-            summary = args._run(args, ctx)
+        summary = args._run(args, ctx)
     except WorkbenchError as e:
         if args.debug:
             log.exception("failed")
@@ -247,36 +244,6 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     _emit(summary, args.json, t0)
     return 0
-
-
-@contextmanager
-def stdout_for_json_only(enabled: bool) -> Iterator[None]:
-    """With ``--json``, send whatever the libraries write to stdout to stderr meanwhile.
-
-    Under mpirun stdout is a terminal to the ranks, so some libraries
-    (UFL's logger, for one) write colour codes there; file descriptor 1 is
-    pointed at stderr while the command runs, so stdout carries the JSON
-    summary only. Without a real stdout (in-process callers) nothing is done.
-    """
-    try:
-        if not enabled:
-            raise OSError
-        sys.stdout.flush()
-        fd = sys.stdout.fileno()
-        err = sys.stderr.fileno()
-    except (AttributeError, OSError, ValueError):
-        yield
-        return
-    saved = os.dup(fd)
-    os.dup2(err, fd)
-    try:
-        yield
-    finally:
-        try:
-            sys.stdout.flush()
-        finally:
-            os.dup2(saved, fd)
-            os.close(saved)
 
 
 def _emit(summary: dict[str, Any] | None, as_json: bool, t0: float) -> None:
