@@ -178,11 +178,8 @@ class CaseResult:
         import h5py
 
         path = Path(path)
-        self.branch.save(path)
-        with atomic_path(path) as tmp:
-            import shutil
-
-            shutil.copyfile(path, tmp)
+        with atomic_path(path) as tmp:  # the file appears whole (a resume unit) or not at all
+            self.branch.save(tmp)
             with h5py.File(tmp, "a") as h:
                 g = h.require_group("case")
                 g["points"] = self.points
