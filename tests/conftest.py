@@ -44,6 +44,45 @@ def upd():
     return run_upd
 
 
+TINY = ROOT / "tests" / "studies" / "tiny.toml"
+
+
+@pytest.fixture(scope="session")
+def tiny_resumed(tmp_path_factory):
+    """The tiny study, SIGKILLed during its FE stage, run again and SIGKILLed after its
+    first case, then resumed: (folder, JSON summary of the last run).
+
+    Shared by the resume test and the study-state tests (xdist group "resume"), which
+    work on copies of the folder so that they reuse its meshes and reduced models.
+    """
+    import signal
+    import time
+
+    out = tmp_path_factory.mktemp("tiny") / "tiny"
+    cmd = [sys.executable, "-m", "workbench.cli.main", "study", str(TINY), "--out", str(out)]
+    log = out.parent / "killed.err"
+
+    def kill_when(ready) -> None:
+        with log.open("w") as fh:
+            p = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=fh)
+        t0 = time.time()
+        while not ready():
+            assert p.poll() is None and time.time() - t0 < 600, log.read_text()[-2000:]
+            time.sleep(0.05)
+        p.send_signal(signal.SIGKILL)  # no chance to clean up: atomic writes must do
+        p.wait()
+
+    # 1. during the FE stage (the reduction of the rig has started)
+    kill_when(lambda: "building the craig-bampton model" in log.read_text())
+    # 2. during the curves (the first case is finished)
+    cases = out / "cache" / "cases"
+    kill_when(lambda: cases.is_dir() and any(cases.glob("*.h5")))
+    r = run_upd("study", TINY, "--out", out, "--json")
+    assert r.code == 0, r
+    assert "removing the stale lock" in r.err  # the killed runs' lock does not block
+    return out, r.json
+
+
 def image_std(png: str | Path) -> float:
     """Pixel standard deviation of an image (0 for a blank one)."""
     import matplotlib.image as mpimg

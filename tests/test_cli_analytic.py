@@ -77,8 +77,8 @@ def test_out_writes_nonblank_figures_and_csvs(tmp_path):
 @pytest.mark.parametrize("args, param, fragment", [
     (("--cone-angle", "45"), "cone_angle_deg = 45.0", "vertical"),
     (("--cone-angle", "60"), "cone_angle_deg = 60.0", "cone_angle_deg < beta_deg = 45 deg"),
-    (("--r1", "-5"), "r1_mm = -5.0", "0 mm < r1_mm"),
-    (("--beta", "90"), "beta_deg = 90.0", "beta_deg < 90 deg"),
+    (("--r1", "-5"), "r1_mm = -5.0", "0.001 mm <= r1_mm"),
+    (("--beta", "90"), "beta_deg = 90.0", "beta_deg <= 89 deg"),
     (("--beta", "abc"), "beta_deg = 'abc'", "not a number"),
     (("--length", "forty"), "length_mm = 'forty'", "not a number"),
     (("--points", "2"), "points = 2", "3 <= points"),

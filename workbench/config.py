@@ -68,6 +68,11 @@ def check_field(f: dataclasses.Field, value: Any, where: str = "", typ: Any = No
     typ = f.type if typ is None else typ
     if m.get("choices"):
         return check_choice(name, value, m["choices"])
+    if typ in (int, "int", float, "float") and isinstance(value, str) and _numeric(value):
+        # a quoted number in a parameter file is a typo, not a number: no silent coercion
+        # (other text falls through to the range check's "not a number")
+        raise InputError(name, value, "a number" if typ in (float, "float") else
+                         "a whole number", "a string; write it without quotes")
     if typ in (int, "int"):
         return check_int(name, value, m.get("lo"), m.get("hi"))
     if typ in (float, "float"):
@@ -85,6 +90,14 @@ def check_field(f: dataclasses.Field, value: Any, where: str = "", typ: Any = No
             raise InputError(name, value, "a string")
         return value
     return value
+
+
+def _numeric(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
 
 
 def validate(record: Any, where: str = "") -> None:
@@ -136,6 +149,13 @@ def read_toml(path: str | Path) -> dict[str, Any]:
             return tomllib.load(fh)
     except tomllib.TOMLDecodeError as e:
         raise InputError("file", str(p), "valid TOML", str(e)) from None
+    except UnicodeDecodeError as e:
+        raise InputError("file", str(p), "a UTF-8 text file (TOML)",
+                         f"byte 0x{e.object[e.start]:02x} at offset {e.start} is not UTF-8"
+                         ) from None
+    except OSError as e:
+        raise InputError("file", str(p), "a readable TOML file",
+                         e.strerror or type(e).__name__) from None
 
 
 def record_to_dict(record: Any) -> dict[str, Any]:

@@ -37,12 +37,17 @@ class InputError(WorkbenchError, ValueError):
 
 
 class SolveError(WorkbenchError, RuntimeError):
-    """A solve failed; ``partial`` carries what was computed before it."""
+    """A solve failed; ``partial`` carries what was computed before it.
+
+    ``summary``: the command's JSON summary of what was done; the CLI still
+    prints it (before the error line and exit code 3).
+    """
 
     exit_code = 3
 
-    def __init__(self, message: str, partial: object = None):
+    def __init__(self, message: str, partial: object = None, summary: dict | None = None):
         self.partial = partial
+        self.summary = summary
         super().__init__(message)
 
 

@@ -99,3 +99,102 @@ def code_version(package_dir: str | Path, names: tuple[str, ...] | None = None,
     files = sorted(here.glob("*.py")) if names is None else [here / n for n in names]
     parts = [file_digest(f, 8) for f in files if f.is_file()]
     return f"{__version__}+{tag}{digest(parts, 8)}"
+
+
+LOCK_NAME = ".upd.lock"
+
+
+def _process_start(pid: int) -> str:
+    """The start time of a process (clock ticks since boot, from /proc), "" if unknown."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+        return stat.rsplit(")", 1)[1].split()[19]
+    except (OSError, IndexError):
+        return ""
+
+
+def _lock_owner_alive(info: dict[str, Any]) -> bool:
+    """True when the process that wrote a lock file still runs (on this host)."""
+    import socket
+
+    pid = info.get("pid")
+    if not isinstance(pid, int) or pid <= 0:
+        return False
+    if info.get("host") not in (None, socket.gethostname()):
+        return True  # another machine's process: it cannot be checked, so it is respected
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass  # it exists, owned by another user
+    start = info.get("start")
+    return not (start and _process_start(pid) and _process_start(pid) != start)  # pid reused
+
+
+@contextmanager
+def folder_lock(folder: str | Path, option: str = "--out") -> Iterator[Path]:
+    """Hold ``folder/.upd.lock`` while a run writes into ``folder``.
+
+    A second run on the same folder is refused at once with an
+    :class:`~workbench.errors.InputError` naming ``option``, the folder and
+    the process holding it. A lock left by a run that was killed (its
+    process no longer exists, or its pid now belongs to another process) is
+    stale: it is removed with a warning and the run goes on.
+    """
+    import logging
+    import socket
+    import time
+
+    from .errors import InputError
+
+    folder = Path(folder)
+    lock = folder / LOCK_NAME
+    me = {"pid": os.getpid(), "host": socket.gethostname(), "start": _process_start(os.getpid()),
+          "since": time.strftime("%Y-%m-%d %H:%M:%S")}
+    for _ in range(20):
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            try:
+                text = lock.read_text()
+                info = json.loads(text)
+            except FileNotFoundError:
+                continue  # released meanwhile: try again
+            except (OSError, ValueError):
+                # being written by its owner this instant, or a stale half-written lock
+                try:
+                    young = time.time() - lock.stat().st_mtime < 5.0
+                except FileNotFoundError:
+                    continue
+                if young:
+                    time.sleep(0.2)
+                    continue
+                info = {}
+            if isinstance(info, dict) and _lock_owner_alive(info):
+                raise InputError(
+                    option, str(folder), "a folder no other upd run is writing to",
+                    f"in use by process {info.get('pid')} since {info.get('since', '?')}; "
+                    "wait for it to end or choose another folder") from None
+            logging.getLogger(__name__).warning(
+                "removing the stale lock of %s (process %s no longer runs)", folder,
+                info.get("pid", "?") if isinstance(info, dict) else "?")
+            try:
+                lock.unlink()
+            except FileNotFoundError:
+                pass
+            continue
+        with os.fdopen(fd, "w") as fh:
+            fh.write(json.dumps(me) + "\n")
+        break
+    else:
+        raise InputError(option, str(folder), "a folder whose lock can be taken",
+                         f"could not take {lock}")
+    try:
+        yield lock
+    finally:
+        try:
+            if json.loads(lock.read_text()).get("pid") == me["pid"]:
+                lock.unlink()
+        except (OSError, ValueError):
+            pass

@@ -89,13 +89,15 @@ class ConeDesign:
 
     beta_deg: float = param(
         45.0, "platform angle: between each platform contact plane and the radial direction z, deg",
-        lo=0.0, hi=90.0, lo_open=True, hi_open=True)
+        lo=1.0, hi=89.0)  # beyond, the tangency equations are singular to round-off
     cone_angle_deg: float = param(
         10.0, "cone semi-angle alpha_c, deg (0 is a cylinder; must stay below beta_deg)",
         lo=0.0)
-    r1_mm: float = param(10.0, "small-end radius R1, mm", lo=0.0, lo_open=True)
+    # bounds: a damper of metres (or of nanometres) is no under-platform damper, and beyond
+    # them the tangency equations are singular to round-off (1e308: exit 3, not 2)
+    r1_mm: float = param(10.0, "small-end radius R1, mm", lo=1.0e-3, hi=1.0e4)
     length_mm: float = param(40.0, "damper length L measured along its axis, mm",
-                             lo=0.0, lo_open=True)
+                             lo=1.0e-3, hi=1.0e4)
 
     def __post_init__(self) -> None:
         hints = typing.get_type_hints(type(self))
@@ -103,6 +105,10 @@ class ConeDesign:
             if f.name != "cone_angle_deg":
                 value = check_field(f, getattr(self, f.name), "", hints[f.name])
                 object.__setattr__(self, f.name, value)
+        if self.length_mm < 1e-2 * self.r1_mm:  # a disc: its tangency is singular
+            raise InputError("length_mm", self.length_mm,
+                             f"length_mm >= 0.01 r1_mm = {1e-2 * self.r1_mm:g} mm",
+                             "a thinner disc has no defined contact lines")
         # the cone angle's range depends on beta: one message naming both
         ac = check_cone_angle(self.cone_angle_deg, self.beta_deg)
         if ac.ndim != 0:

@@ -87,7 +87,7 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         over.setdefault("hbm", {})["nt"] = nt[0]
     if args.no_stability:
         over.setdefault("solver", {})["stability"] = False
-    model = load_frf_model(args.model, over)
+    model = _load(args.model, over, load_frf_model)
     out = ctx.out_dir(f"results/frf/{model.name}")
     mm = model.length_unit == "m"
     dimensionless = model.length_unit == "1"
@@ -159,3 +159,37 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
             + f"); what was computed is in {out}"
         )
     return summary
+
+
+def _load(path: Path, over: dict, load_frf_model):
+    """The model file, with a damaged matrix file or a negative stiffness refused (exit 2)."""
+    import zipfile
+
+    import numpy as np
+
+    from ..config import read_toml
+    from ..errors import InputError, WorkbenchError
+
+    try:
+        model = load_frf_model(path, over)
+    except WorkbenchError:
+        raise
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as e:
+        # h5py/numpy on a truncated or corrupt .h5/.npz
+        name = (read_toml(path).get("model") or {}).get("matrices", "")
+        raise InputError("model.matrices", name, "a readable .npz or HDF5 file",
+                         f"{type(e).__name__}: {str(e)[:160]}") from None
+    K = model.system.K
+    d = np.asarray(K.diagonal() if hasattr(K, "diagonal") else np.diag(K), dtype=float)
+    if d.size and d.min() < 0:
+        i = int(np.argmin(d))
+        raise InputError("model.stiffness", f"K[{i},{i}] = {d[i]:g}",
+                         "a stiffness matrix without negative stiffness (no negative diagonal "
+                         "entry)")
+    if 0 < d.size <= 2000:  # small models: positive semi-definite (round-off allowed)
+        Kd = K.toarray() if hasattr(K, "toarray") else np.asarray(K, dtype=float)
+        lam = np.linalg.eigvalsh(0.5 * (Kd + Kd.T))
+        if lam[0] < -1e-9 * max(1.0, float(np.abs(lam).max())):
+            raise InputError("model.stiffness", f"lowest eigenvalue {lam[0]:.4g}",
+                             "a positive semi-definite stiffness matrix (no negative stiffness)")
+    return model

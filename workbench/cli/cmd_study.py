@@ -35,11 +35,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace, ctx) -> dict:
-    from ..studies.runner import check_failures, run_study
+    from ..studies.runner import study_lock
     from ..studies.spec import cli_values, load_study
 
     spec = load_study(args.file, cli_values(args))
     out = ctx.out_dir(f"results/{spec.name}")
+    with study_lock(out):  # a second run on the same folder is refused at once
+        return _run(spec, out, args)
+
+
+def _run(spec, out: Path, args: argparse.Namespace) -> dict:
+    from ..studies.runner import check_failures, run_study
+
     if spec.kind == "fidelity":  # knob ladders against a reference, Pareto front, --tolerance
         from ..studies.fidelity import run_fidelity
 
@@ -54,8 +61,9 @@ def run(args: argparse.Namespace, ctx) -> dict:
         "report": str(out / "report.html"), "n_cases": len(results.cases),
         "n_computed": results.extras.get("n_computed"),
         "n_reused": results.extras.get("n_reused"),
+        "peak_not_reached": [c.case_id for c in results.uncovered()],
         "timings_s": {k: round(v, 2) for k, v in results.timings.items()},
         "cases": results.summaries(),
     }
-    check_failures(results)
+    check_failures(results, summary)
     return summary

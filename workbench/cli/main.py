@@ -24,6 +24,8 @@ import argparse
 import importlib
 import json
 import logging
+import os
+import re
 import sys
 import time
 from dataclasses import dataclass, field
@@ -31,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
-from ..errors import WorkbenchError
+from ..errors import InputError, WorkbenchError
 from ..io import to_jsonable
 
 COMMANDS = ["analytic", "mesh", "modes", "reduce", "screen", "frf", "study", "report"]
@@ -47,12 +49,44 @@ class Context:
     json: bool
     debug: bool
     timings: dict[str, float] = field(default_factory=dict)
+    created: list[Path] = field(default_factory=list)  # folders out_dir made, outermost first
 
     def out_dir(self, default: str) -> Path:
-        """The output folder (``--out`` or ``default``), created."""
+        """The output folder (``--out`` or ``default``), created.
+
+        A path that cannot be a folder (an existing file, ``/proc/x``, no
+        permission) is an InputError naming ``--out``.
+        """
         p = self.out if self.out is not None else Path(default)
-        p.mkdir(parents=True, exist_ok=True)
+        what = "--out" if self.out is not None else "output folder"
+        if p.exists() and not p.is_dir():
+            raise InputError(what, str(p), "a folder", "it is an existing file")
+        new = [q for q in (p, *p.parents) if not q.exists()][::-1]
+        try:
+            p.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise InputError(what, str(p), "a folder that can be created",
+                             e.strerror or type(e).__name__) from None
+        self.created += new
+        if not os.access(p, os.W_OK | os.X_OK):
+            raise InputError(what, str(p), "a folder you can write to", "permission denied")
         return p
+
+    def remove_empty_created(self) -> None:
+        """Remove the folders :meth:`out_dir` made if nothing but empty folders is in them
+        (rejected input leaves no empty output folder behind)."""
+        if not self.created:
+            return
+        for root, _, _ in sorted(os.walk(self.created[-1]), key=lambda t: -len(t[0])):
+            try:
+                Path(root).rmdir()
+            except OSError:
+                return
+        for q in reversed(self.created[:-1]):
+            try:
+                q.rmdir()
+            except OSError:
+                return
 
 
 class _Parser(argparse.ArgumentParser):
@@ -131,9 +165,43 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
+_NEGATIVE = re.compile(r"^-(\d|\.\d|inf|nan)", re.IGNORECASE)
+
+
+def join_negative_values(parser: argparse.ArgumentParser, argv: list[str]) -> list[str]:
+    """``--harmonics -1,1`` -> ``--harmonics=-1,1`` for the options that take a value.
+
+    argparse takes a value starting with ``-`` that is not a plain negative
+    number (``-1,1``, ``-1e3``) for an option and reports "expected one
+    argument"; joined, the value reaches the check that names the option
+    and what is allowed.
+    """
+    takes_value: set[str] = set()
+    parsers = [parser]
+    for a in parser._actions:  # noqa: SLF001 - argparse has no public walk of sub-parsers
+        if isinstance(a, argparse._SubParsersAction):  # noqa: SLF001
+            parsers += list(a.choices.values())
+    for p in parsers:
+        for opt, a in p._option_string_actions.items():  # noqa: SLF001
+            if opt.startswith("--") and a.nargs != 0:
+                takes_value.add(opt)
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        tok = argv[i]
+        if tok in takes_value and i + 1 < len(argv) and _NEGATIVE.match(argv[i + 1]):
+            out.append(f"{tok}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(tok)
+        i += 1
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = parser.parse_args(join_negative_values(parser, argv))
     if not getattr(args, "_run", None):
         parser.print_help(sys.stderr)
         return 2
@@ -148,6 +216,10 @@ def main(argv: list[str] | None = None) -> int:
     except WorkbenchError as e:
         if args.debug:
             log.exception("failed")
+        if isinstance(e, InputError):  # rejected input leaves no empty output folder behind
+            ctx.remove_empty_created()
+        if isinstance(getattr(e, "summary", None), dict):  # what was done is still shown
+            _emit(e.summary, args.json, t0)
         sys.stderr.write(f"{prog}: error: {e}\n")
         return e.exit_code
     except KeyboardInterrupt:
@@ -170,16 +242,23 @@ def main(argv: list[str] | None = None) -> int:
             sys.stderr.flush()
             MPI.COMM_WORLD.Abort(1)
         return 1
-    if summary is None:
-        summary = {}
+    _emit(summary, args.json, t0)
+    return 0
+
+
+def _emit(summary: dict[str, Any] | None, as_json: bool, t0: float) -> None:
+    """Print a command's summary on stdout (JSON or human-readable; rank 0 only)."""
+    from .. import log as wlog
+
+    summary = {} if summary is None else summary
     summary.setdefault("wall_s", round(time.perf_counter() - t0, 3))
     if wlog.mpi_rank() != 0:
-        return 0  # under mpirun the summary is printed once, by rank 0
-    if args.json:
+        return  # under mpirun the summary is printed once, by rank 0
+    if as_json:
         sys.stdout.write(json.dumps(summary, indent=2, default=to_jsonable) + "\n")
     else:
         sys.stdout.write(_human(json.loads(json.dumps(summary, default=to_jsonable))) + "\n")
-    return 0
+    sys.stdout.flush()
 
 
 def num(text: str) -> float | str:

@@ -165,6 +165,8 @@ def reduce_body(
 def _load_if_current(path: Path, dig: str) -> ReducedModel | None:
     """The cached model if its digest matches and it reads back whole, else None."""
     if ReducedModel.peek_digest(path) != dig:
+        if path.is_file() and ReducedModel.peek_digest(path) is None:
+            log.warning("%s is unreadable; rebuilding it", path)
         return None
     try:
         return ReducedModel.load(path)

@@ -119,7 +119,9 @@ def _reusable(h5: Path, dig: str) -> BuiltGeometry | None:
         return None
     try:
         old = BuiltGeometry.load(h5)
-    except (OSError, KeyError, ValueError):
+    except (OSError, KeyError, ValueError) as e:
+        log.warning("geometry: cached %s is unreadable (%s: %s); rebuilding it", h5,
+                    type(e).__name__, e)
         return None
     needed = [old.rig_msh, old.damper_msh] + [
         h5.parent / f"{b}.{ext}" for b in ("rig", "damper") for ext in ("xdmf", "h5")]

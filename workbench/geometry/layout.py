@@ -129,6 +129,16 @@ class Layout:
         return (np.asarray(p, dtype=float) - ridge) @ self.normals[k]
 
 
+def _cone_large(name: str, pl: dict, l_hi: float, r2_hi: float) -> tuple[str, float, str]:
+    """The parameter to blame when the cone's large end does not fit: its length, or, when
+    even the small radius is too large for any length, ``cone.r1_mm``."""
+    if l_hi <= 0.0:
+        return ("cone.r1_mm", pl["r1"], f"cone.r1_mm < {r2_hi:.4g} mm (the large radius "
+                f"R2 = R1 + L tan(alpha_c) must stay <= {r2_hi:.4g} mm)")
+    return (name, pl["length"],
+            f"{name} <= {l_hi:.4g} mm (large radius R2 <= {r2_hi:.4g} mm)")
+
+
 def _fit_error(param: str, value: float, allowed: str, why: str) -> InputError:
     return InputError(param, value, allowed, why)
 
@@ -424,8 +434,7 @@ def _check_fit(gp: GeometryParams, g: dict, seat: dict) -> None:
         r2_hi = hi_ok * ca * sb / cb
         l_hi = (r2_hi - pl["r1"]) / math.tan(pl["semi_angle"])
         small = ("cone.r1_mm", pl["r1"], f"cone.r1_mm >= {r1_lo:.4g} mm")
-        large = ("cone.length_mm", pl["length"],
-                 f"cone.length_mm <= {max(l_hi, 0.0):.4g} mm (large radius R2 <= {r2_hi:.4g} mm)")
+        large = _cone_large("cone.length_mm", pl, l_hi, r2_hi)
         cg = math.cos(pl["gamma"])
         long_ = ("cone.length_mm", pl["length"],
                  f"cone.length_mm <= {2 * half_w * ca * ca / cg:.4g} mm")
@@ -453,8 +462,7 @@ def _check_fit(gp: GeometryParams, g: dict, seat: dict) -> None:
             hit = ("cylinder.radius_mm", pl["radius"], f"cylinder.radius_mm <= {x_max:.4g} mm")
         elif d == "cone":
             l_hi = (x_max - pl["r1"]) / math.tan(pl["semi_angle"])
-            hit = ("cone.length_mm", pl["length"],
-                   f"cone.length_mm <= {max(l_hi, 0.0):.4g} mm (large radius R2 <= {x_max:.4g} mm)")
+            hit = _cone_large("cone.length_mm", pl, l_hi, x_max)
         else:
             hit = ("wedge.face_width_mm", gp.shape.face_width_mm,
                    f"wedge.face_width_mm <= {max(x_max / sb - pl['s_a'], 0.0):.4g} mm")

@@ -78,6 +78,28 @@ class DolfinxMesh:
     point_groups: dict[str, np.ndarray]  # name -> (k, 3) coordinates, m
 
 
+def import_gmshio() -> Any:
+    """``dolfinx.io.gmshio``, imported without losing the SIGINT handler.
+
+    Importing it imports gmsh, which sets SIGINT to ``SIG_DFL``: a Ctrl-C
+    would then kill the process silently instead of raising
+    KeyboardInterrupt (and :func:`~workbench.geometry.occ.gmsh_session`
+    would record and restore ``SIG_DFL``). The handler in place before the
+    import is put back.
+    """
+    import signal
+    import threading
+
+    main = threading.current_thread() is threading.main_thread()
+    prev = signal.getsignal(signal.SIGINT) if main else None
+    try:
+        from dolfinx.io import gmshio
+    finally:
+        if main and prev is not None:
+            signal.signal(signal.SIGINT, prev)
+    return gmshio
+
+
 def read_msh(path: str | Path, comm: Any = None, rank: int = 0) -> DolfinxMesh:
     """Read a ``.msh`` written by the geometry stage into a (distributed) dolfinx mesh.
 
@@ -85,9 +107,9 @@ def read_msh(path: str | Path, comm: Any = None, rank: int = 0) -> DolfinxMesh:
     and dolfinx distributes the mesh. Cell and facet tags carry the physical
     tags; ``groups`` maps the names to them.
     """
-    from dolfinx.io import gmshio
     from mpi4py import MPI
 
+    gmshio = import_gmshio()
     comm = MPI.COMM_WORLD if comm is None else comm
     if comm.rank == rank:
         with gmsh_session() as gmsh:

@@ -107,11 +107,15 @@ class Response:
     y_mm: float = param(0.0, "axial position (0 = blade centre), mm")
 
 
+MAX_SIZE_MM = 1000.0  # a mesh size beyond the rig's own size (~300 mm) means nothing
+
+
 @dataclass(frozen=True)
 class MeshSizes:
     """Target element sizes (gmsh) of the second-order tetrahedral meshes."""
 
-    size_mm: float = param(9.0, "global element size of the rig, mm", lo=0.0, lo_open=True)
+    size_mm: float = param(9.0, "global element size of the rig, mm", lo=0.0, lo_open=True,
+                           hi=MAX_SIZE_MM)
     contact_size_mm: float = param(
         1.5, "element size at the contact points (rig and damper), mm", lo=0.0, lo_open=True)
     refine_distance_mm: float = param(
@@ -278,7 +282,7 @@ def load_geometry_params(
         _check_tables(overrides, "overrides")
         data = _merge(data, overrides)
     if size_mm is not None:
-        size = check_range("size_mm", size_mm, 0.0, lo_open=True, unit="mm")
+        size = check_range("size_mm", size_mm, 0.0, MAX_SIZE_MM, lo_open=True, unit="mm")
         data = _merge(data, {"rig": {"mesh": {"size_mm": size}}})
     rig = load_record(RigParams, data.get("rig", {}), "rig.")
     # the other dampers' tables are checked too, so a typo there is not silently kept

@@ -318,6 +318,8 @@ def _int_list(key: str, value: Any, n: int, allow_none: bool = False) -> list[in
     ):
         raise InputError(key, value, "a list of whole numbers (DOF indices)")
     lo = -1 if allow_none else 0
+    if n < 1:  # no DOF at all: the matrices are empty, not the index wrong
+        raise InputError("model.mass", "shape (0, 0)", "a square matrix, 1 x 1 or more")
     for i, v in enumerate(value):
         if not lo <= v < n:
             raise InputError(f"{key}[{i}]", v, f"a DOF index {lo} <= i < {n}")

@@ -92,6 +92,37 @@ class CaseResult:
         return self.branch.peak(self.output)
 
     @property
+    def peak_covered(self) -> bool:
+        """True when the curve shows its resonance peak.
+
+        That is: the curve reached the end of its band without failing and
+        its highest point lies strictly inside it. Otherwise (a curve
+        stopped by ``max-points``, a failed solve, a band that ends before
+        the resonance) the highest computed point is only a *lower bound*
+        of the peak, and :meth:`summary` reports it as such, never as the
+        peak.
+        """
+        i, n = self.peak_index, self.branch.n_points
+        return bool(self.branch.completed and not self.branch.failed and 0 < i < n - 1)
+
+    def peak_note(self) -> str:
+        """Why the peak is a lower bound ("" when it is covered)."""
+        if self.peak_covered:
+            return ""
+        i = self.peak_index
+        if i < 0:
+            return "no point computed: no peak"
+        f, a = float(self.freq_hz[i]), float(self.amp_mm[i])
+        if self.branch.completed and not self.branch.failed:
+            where = (f"the highest point is at the band edge ({f:.6g} Hz): the resonance lies "
+                     "outside the band")
+        else:
+            why = self.branch.message or "stopped early"
+            where = (f"the curve stopped at {float(self.freq_hz[-1]):.6g} Hz before covering its "
+                     f"resonance ({why})")
+        return f"{where}; {a:.4g} mm is only a lower bound of the peak"
+
+    @property
     def energy_mj(self) -> np.ndarray:
         """(n_points, n_pairs) friction energy per cycle of every pair, mJ."""
         return self.branch.friction_energy * 1e3
@@ -128,6 +159,20 @@ class CaseResult:
                             3),
         }
         out.update({f"share_{k}": v for k, v in self.status_shares().items()})
+        out.update(self._peak_bound())
+        return out
+
+    def _peak_bound(self) -> dict[str, Any]:
+        """Summary keys saying whether the peak was reached; a peak the curve did not reach
+        is never reported as one: its values are None and its amplitude a lower bound."""
+        i, covered = self.peak_index, self.peak_covered
+        out: dict[str, Any] = {"peak_covered": covered, "peak_lower_bound_mm": None,
+                               "peak_note": self.peak_note()}
+        if not covered and i >= 0:
+            out["peak_lower_bound_mm"] = float(self.amp_mm[i])
+            for k in ("peak_frequency_hz", "peak_amplitude_mm", "friction_energy_mj",
+                      "peak_stable", "peak_stability"):
+                out[k] = None
         return out
 
     # ---- storage
@@ -136,11 +181,8 @@ class CaseResult:
         import h5py
 
         path = Path(path)
-        self.branch.save(path)
-        with atomic_path(path) as tmp:
-            import shutil
-
-            shutil.copyfile(path, tmp)
+        with atomic_path(path) as tmp:  # the file appears whole (a resume unit) or not at all
+            self.branch.save(tmp)
             with h5py.File(tmp, "a") as h:
                 g = h.require_group("case")
                 g["points"] = self.points
@@ -214,6 +256,10 @@ class StudyResults:
 
     def summaries(self) -> list[dict[str, Any]]:
         return [c.summary() for c in self.cases]
+
+    def uncovered(self) -> list[CaseResult]:
+        """The cases whose curve did not cover the resonance peak (failed ones included)."""
+        return [c for c in self.cases if not c.peak_covered]
 
     def save(self, path: str | Path) -> Path:
         """All cases in one HDF5 file: /cases/<case_id>/... plus attributes."""

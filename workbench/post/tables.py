@@ -415,6 +415,13 @@ def cases_table(results: StudyResults) -> Table:
             "yes" if s["completed"] else ("failed" if c.branch.failed else "no"),
             f"{s['wall_s']:.3g}", s["message"],
         ))
+    for k, c in enumerate(results.cases):  # a peak the curve did not reach: a lower bound
+        low = c.summary()["peak_lower_bound_mm"]
+        if low is not None:
+            r = list(rows[k])
+            r[6], r[7] = f">= {fixed(low, 6)} (peak not reached)", f">= {fixed(low / c.force_n, 6)}"
+            r[12] += ", peak not reached"
+            rows[k] = tuple(r)
     return Table(header, tuple(rows))
 
 

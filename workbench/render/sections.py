@@ -507,6 +507,7 @@ def _cases(b: _Builder) -> None:
     n_ok = sum(1 for c in r.cases if c.branch.completed and not c.branch.failed)
     text = [f"{len(r.cases)} cases, {n_ok} completed."]
     text += notes
+    text += [f"Peak NOT reached, {c.case_id}: {c.peak_note()}." for c in r.uncovered()]
     sec = b.section("cases", "Cases", text)
     b.table(sec, "cases", cases_table(r),
             "Every case: resonance, friction energy, stability, cost and completion")

@@ -26,7 +26,9 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass
+from collections.abc import Iterator
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -51,6 +53,8 @@ class PreparedModel:
     bands: dict[float, tuple[float, float, dict[str, float]]]
     timings: dict[str, float]
     contact_params: Any = None
+    # stage -> what it cost when it was computed, for the stages reused from the cache
+    cached: dict[str, float] = field(default_factory=dict)
 
 
 def _comm():
@@ -61,6 +65,52 @@ def _comm():
 
         return MPI.COMM_WORLD
     return None
+
+
+@contextmanager
+def study_lock(out: Path) -> Iterator[None]:
+    """Hold the study folder's lock (rank 0 takes it; every rank sees a refusal).
+
+    A second ``upd study`` on the same folder is refused at once with one
+    line (exit 2); a lock left by a killed run is removed (pid check).
+    """
+    from ..io import folder_lock
+
+    comm = _comm()
+    if comm is None:
+        with folder_lock(out):
+            remove_stale_parts(out)
+            yield
+        return
+    with ExitStack() as stack:
+        err = None
+        if comm.rank == 0:
+            try:
+                stack.enter_context(folder_lock(out))
+                remove_stale_parts(out)
+            except InputError as e:
+                err = (e.param, e.value, e.allowed, e.why)
+        err = comm.bcast(err, root=0)
+        if err is not None:
+            raise InputError(*err)
+        yield
+
+
+def remove_stale_parts(out: Path) -> int:
+    """Delete the half-written ``.*.part`` files a killed run left in a study folder.
+
+    Called with the folder's lock held, so no other run is writing them.
+    """
+    n = 0
+    for p in list(out.rglob(".*.part*")):
+        try:
+            p.unlink()
+            n += 1
+        except OSError:
+            pass
+    if n:
+        log.info("removed %d half-written file(s) left by an interrupted run", n)
+    return n
 
 
 def geometry_request(case: Case) -> dict[str, Any]:
@@ -90,25 +140,31 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
     """Mesh, reduce and assemble the model of ``case`` (each stage cached on disk)."""
     from ..assembly.model import assemble
     from ..contact.elements import ContactElements
-    from ..fe.reduce import reduce_body
-    from ..geometry import build_geometry
+    from ..fe.reduce import model_path, reduce_body
     from ..hbm.system import System
     from ..log import stage
 
     timings: dict[str, float] = {}
-    req = geometry_request(case)
-    gdir = out / "cache" / "geometry" / f"{case.damper}-{digest(req, 10)}"
+    cached: dict[str, float] = {}
+    gdir = geometry_dir(case, out)
+    t0 = time.time()
     with stage(timings, "geometry"):
-        geom = build_geometry(req["damper"], gdir, geometry_file=req["geometry_file"],
-                              size_mm=req["size_mm"], overrides=req["overrides"])
+        geom = load_geometry(case, out)
+    if _older(gdir / "geometry.h5", t0):  # reused: its cost is the one of its first build
+        cached["geometry"] = float(sum((geom.stats.get("timings_s") or {}).values()))
     s = case.settings
     fe_dir = out / "cache" / "fe"
-    with stage(timings, "reduction rig"):
-        rig = reduce_body(geom, "rig", n_modes=s["modes"], cache_dir=fe_dir, comm=comm,
-                          force=force)
-    with stage(timings, "reduction damper"):
-        damper = reduce_body(geom, "damper", n_modes=s["modes"], rigid=s["rigid-damper"],
-                             cache_dir=fe_dir, comm=comm, force=force)
+    reduced = {}
+    for body in ("rig", "damper"):
+        t0 = time.time()
+        with stage(timings, f"reduction {body}"):
+            reduced[body] = reduce_body(
+                geom, body, n_modes=s["modes"], rigid=s["rigid-damper"] and body == "damper",
+                cache_dir=fe_dir, comm=comm, force=force)
+        rm = reduced[body]
+        if _older(model_path(fe_dir, rm.inputs, rm.digest), t0):
+            cached[f"reduction {body}"] = float(rm.timings.get("total", 0.0))
+    rig, damper = reduced["rig"], reduced["damper"]
     with stage(timings, "assembly"):
         beta = float(geom.params["rig"]["platform"]["angle_deg"])
         cparams = contact_params_for(case)
@@ -118,7 +174,30 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
         contacts = ContactElements(W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt,
                                    kn=model.kn, n0=model.n0)
         system = System(M=model.M, K=model.K, zeta=s["damping"], contacts=contacts)
-    return PreparedModel(geom, gdir, model, system, {}, timings, cparams)
+    return PreparedModel(geom, gdir, model, system, {}, timings, cparams, cached)
+
+
+def _older(path: Path, t0: float) -> bool:
+    """True when ``path`` exists and was written before ``t0`` (time.time()): a reused file."""
+    try:
+        return path.stat().st_mtime < t0
+    except OSError:
+        return False
+
+
+def geometry_dir(case: Case, out: Path) -> Path:
+    """The cached geometry folder of a case's model."""
+    return out / "cache" / "geometry" / f"{case.damper}-{digest(geometry_request(case), 10)}"
+
+
+def load_geometry(case: Case, out: Path):
+    """The case's BuiltGeometry (built once, then read from its cache folder)."""
+    from ..geometry import build_geometry
+
+    req = geometry_request(case)
+    return build_geometry(req["damper"], geometry_dir(case, out),
+                          geometry_file=req["geometry_file"], size_mm=req["size_mm"],
+                          overrides=req["overrides"])
 
 
 def band_for(prep: PreparedModel, case: Case) -> tuple[float, float]:
@@ -216,20 +295,34 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
                 failures.append(f"{c.name}: {res.branch.message}")
                 log.warning("case %s stopped early: %s (its %d points are kept)", c.name,
                             res.branch.message, res.branch.n_points)
+            elif not res.peak_covered:
+                log.warning("case %s: %s", c.name, res.peak_note())
             bar.update(1)
             if not bars_enabled():
                 log.info("case %d/%d done: %s (%d points, %.1f s)", k + 1, len(mine), c.name,
                          res.branch.n_points, res.timings["hbm"])
     timings["cases (wall)"] = time.perf_counter() - t_cases
+    # one picture set per damper, of the first model of that damper in plan order (a sweep
+    # prepares several models of one damper: the report shows the first, so the others need
+    # no stuck-mode solve); made also when every case came from the cache, so a resumed
+    # study's report has the pictures an uninterrupted one has
+    cached_costs: dict[str, float] = {}
     t_pic = time.perf_counter()
-    # one picture set per damper (a sweep prepares several models of one damper: the
-    # report shows the first, so the others need no stuck-mode solve)
-    pictured: set[str] = set()
-    for prep in prepared.values():
-        if prep.geometry.damper not in pictured:
-            pictured.add(prep.geometry.damper)
-            model_pictures(prep, out, comm=comm)
-    if prepared:
+    made = False
+    for c in cases:
+        if c.damper in {x.damper for x in cases[:cases.index(c)]}:
+            continue
+        prep = prepared.get(c.model_digest)
+        geom, cparams = ((prep.geometry, prep.contact_params) if prep is not None else
+                         (load_geometry(c, out), contact_params_for(c)))
+        cost = model_pictures(geom, cparams, out, comm=comm)
+        if cost is None:
+            old = _picture_cost(out, c.damper)
+            if old:
+                cached_costs["model pictures"] = cached_costs.get("model pictures", 0.0) + old
+        else:
+            made = True
+    if made:
         timings["model pictures"] = time.perf_counter() - t_pic
     if comm is not None:
         failures = sum(comm.allgather(failures), [])
@@ -245,7 +338,10 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     results = StudyResults(name=spec.name, kind=spec.kind,
                            cases=[CaseResult.load(case_dir / f"{c.digest}.h5") for c in cases],
                            inputs=spec.as_dict())
+    if rank == 0:
+        _add_cached_costs(out, cases, todo, prepared, results, cached_costs)
     results.timings = timings
+    results.extras["cached_costs"] = cached_costs
     if rank == 0:
         t_post = time.perf_counter()
         results.extras["bands"] = {
@@ -260,37 +356,38 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     return results
 
 
-def model_pictures(prep: PreparedModel, out: Path, *, comm=None) -> None:
+def model_pictures(geometry, contact_params, out: Path, *, comm=None) -> float | None:
     """The rig with the damper, and its stuck first bending modes, for the report.
 
     ``figures/model_<damper>.png`` and ``figures/modes_<damper>.png``; done
     again only when the geometry or the contact parameters changed (their
-    digest is kept beside, in ``figures/.model_<damper>.json``). The modes
-    are those of the full FE model with the damper stuck (every rank takes
-    part); rank 0 draws.
+    digest is kept beside, in ``figures/.model_<damper>.json``, with what
+    drawing them cost). The modes are those of the full FE model with the
+    damper stuck (every rank takes part); rank 0 draws. Returns the time
+    spent, s, or None when the pictures were up to date.
     """
     import json
 
     from ..fe.modes import compute_modes
 
-    damper = prep.geometry.damper
+    t0 = time.perf_counter()
+    damper = geometry.damper
     figs = out / "figures"
     stamp = figs / f".model_{damper}.json"
-    params = prep.contact_params
-    key = digest({"geometry": prep.geometry.digest, "contact": params})
+    key = digest({"geometry": geometry.digest, "contact": contact_params})
     rank = 0 if comm is None else comm.rank
     fresh = False
     if rank == 0:
         try:
             fresh = json.loads(stamp.read_text()).get("key") == key and all(
                 (figs / f"{k}_{damper}.png").is_file() for k in ("model", "modes"))
-        except (OSError, ValueError):
+        except (OSError, ValueError, AttributeError):
             fresh = False
     if comm is not None:
         fresh = comm.bcast(fresh, root=0)
     if fresh:
-        return
-    res = compute_modes(prep.geometry, contact="stuck", n=4, contact_params=params, comm=comm)
+        return None
+    res = compute_modes(geometry, contact="stuck", n=4, contact_params=contact_params, comm=comm)
     if rank == 0:
         import shutil
         import tempfile
@@ -299,13 +396,69 @@ def model_pictures(prep: PreparedModel, out: Path, *, comm=None) -> None:
         from ..render.scene import render_scene
 
         figs.mkdir(parents=True, exist_ok=True)
-        render_scene(prep.geometry, figs / f"model_{damper}.png",
+        render_scene(geometry, figs / f"model_{damper}.png",
                      title=f"rig with the {damper} damper")
         with tempfile.TemporaryDirectory() as tmp:
             made = [p for p in render_modes(res, tmp, modes=[]) if p.name == "first_bending.png"]
             if made:
                 shutil.copyfile(made[0], figs / f"modes_{damper}.png")
-        write_json(stamp, {"key": key})
+        write_json(stamp, {"key": key, "cost_s": round(time.perf_counter() - t0, 3)})
+    return time.perf_counter() - t0
+
+
+def _picture_cost(out: Path, damper: str) -> float:
+    """What drawing a damper's (cached) model pictures cost, s (0 when unknown)."""
+    import json
+
+    try:
+        return float(json.loads((out / "figures" / f".model_{damper}.json").read_text())
+                     .get("cost_s", 0.0))
+    except (OSError, ValueError, TypeError, AttributeError):
+        return 0.0
+
+
+COSTS_FILE = "costs.json"
+
+
+def _add_cached_costs(out: Path, cases: list[Case], todo: list[Case],
+                      prepared: dict[str, PreparedModel], results: StudyResults,
+                      cached_costs: dict[str, float]) -> None:
+    """Fill ``cached_costs`` (stage -> s) with what the work reused from the cache cost.
+
+    A model's stages (geometry, reductions, assembly) cost what the run
+    that computed them measured: ``cache/costs.json`` keeps it per model
+    (updated here with the models of this run); a cached case cost its
+    stored ``hbm`` time. The report lists these beside this run's times.
+    """
+    import json
+
+    ledger_path = out / "cache" / COSTS_FILE
+    try:
+        ledger = json.loads(ledger_path.read_text())
+        if not isinstance(ledger, dict):
+            ledger = {}
+    except (OSError, ValueError):
+        ledger = {}
+    for md, p in prepared.items():
+        entry = dict(ledger.get(md) or {})
+        for k, v in p.timings.items():
+            if k in p.cached:  # reused now: what it cost in the run that computed it
+                entry[k] = float(entry.get(k) or p.cached[k])
+            else:
+                entry[k] = float(v)
+        ledger[md] = entry
+        for k in p.cached:
+            cached_costs[k] = cached_costs.get(k, 0.0) + entry[k]
+    for md in dict.fromkeys(c.model_digest for c in cases):
+        if md in prepared:
+            continue
+        for k, v in (ledger.get(md) or {}).items():
+            cached_costs[k] = cached_costs.get(k, 0.0) + float(v)
+    done = {c.digest for c in todo}
+    old = [r for c, r in zip(cases, results.cases, strict=True) if c.digest not in done]
+    if old:
+        cached_costs[f"cases ({len(old)})"] = float(sum(r.timings.get("hbm", 0.0) for r in old))
+    write_json(ledger_path, ledger)
 
 
 def case_done(case_dir: Path, c: Case) -> bool:
@@ -338,8 +491,11 @@ def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
         write_rows_csv(out / "screen.csv", results.extras["screen"])
     if rows:
         write_rows_csv(out / "summary.csv", rows)
+    timings = dict(results.timings)
+    for k, v in (results.extras.get("cached_costs") or {}).items():
+        timings[f"{k}, reused from the cache (its cost when computed)"] = v
     write_manifest_and_report(out, spec, f"{spec.kind} study,", headline(results),
-                              results.timings, _sections(results, out))
+                              timings, _sections(results, out))
 
 
 def write_manifest_and_report(out: Path, spec: StudySpec, subtitle: str, summary: list[str],
@@ -378,7 +534,11 @@ def _geometry_dirs(out: Path) -> dict[str, Path]:
 
 
 def headline(results: StudyResults) -> list[str]:
-    """One line per damper and family: the peak response over the forces."""
+    """One line per damper and family: the peak response over the forces.
+
+    A case whose curve did not reach its resonance is named with its lower
+    bound, never given as a peak.
+    """
     lines = []
     for d in results.dampers:
         for ph in results.phases:
@@ -390,19 +550,49 @@ def headline(results: StudyResults) -> list[str]:
             s = top.summary()
             # a sweep has several cases per damper and force: name the one quoted
             which = f" ({top.variant.replace('=', ' = ')})" if top.variant else ""
+            if not top.peak_covered:
+                lines.append(
+                    f"{d}, {top.family}{which}: at {top.force_n:g} N the resonance was NOT "
+                    "reached; "
+                    f"the peak is at least {s['peak_lower_bound_mm']:.4g} mm (lower bound: "
+                    f"{top.peak_note()})")
+                continue
             lines.append(
                 f"{d}, {top.family}{which}: at {top.force_n:g} N the peak is "
                 f"{s['peak_amplitude_mm']:.4g} mm at {s['peak_frequency_hz']:.2f} Hz, "
                 f"friction energy {s['friction_energy_mj']:.3g} mJ per cycle")
+    short = results.uncovered()
+    if short:
+        lines.append(f"{len(short)} of {len(results.cases)} case(s) did not cover their "
+                     "resonance (peak only a lower bound): "
+                     + ", ".join(c.case_id for c in short))
     return lines
 
 
-def check_failures(results: StudyResults) -> None:
-    """Raise SolveError (exit 3) after writing everything if some case failed."""
-    bad = results.extras.get("failures") or []
-    if bad:
-        raise SolveError(f"{len(bad)} case(s) stopped early (their points are kept in the "
-                         f"results): " + "; ".join(bad[:3]), partial=results)
+def check_failures(results: StudyResults, summary: dict | None = None) -> None:
+    """Raise SolveError (exit 3) after writing everything if a case failed or fell short.
+
+    Every case of the study counts (also those reused from the cache): a
+    failed solve, or a curve that stopped before its resonance peak (its
+    peak is then only a lower bound). ``summary`` is the command's JSON
+    summary, still printed by the CLI.
+    """
+    failed = [c for c in results.cases if c.branch.failed]
+    short = [c for c in results.uncovered() if not c.branch.failed]
+    if not failed and not short:
+        return
+    parts = []
+    if failed:
+        parts.append(f"{len(failed)} case(s) failed: " + "; ".join(
+            f"{c.case_id} ({c.branch.message})" for c in failed[:3])
+            + ("; ..." if len(failed) > 3 else ""))
+    if short:
+        parts.append(f"{len(short)} case(s) did not reach their resonance peak, which is only a "
+                     "lower bound: " + "; ".join(
+                         f"{c.case_id} ({c.branch.message or 'peak at the band edge'})"
+                         for c in short[:3]) + ("; ..." if len(short) > 3 else ""))
+    raise SolveError(" and ".join(parts) + " (all computed points are kept in the results "
+                     "and the report)", partial=results, summary=summary)
 
 
 __all__ = ["run_study", "prepare_model", "solve_case", "PreparedModel"]

@@ -299,10 +299,52 @@ def load_study(path: str | Path | None, cli_values: Mapping[str, Any] | None = N
             raise InputError(key, f"[{key}] table", "top-level keys named like the "
                              "upd study options (no tables)")
         o = BY_NAME.get(key)
+        if o is not None:
+            check_toml_type(o, v, str(path))
         if o is not None and o.kind == "path" and isinstance(v, str) and path is not None:
             # a relative path in a study file is relative to that file, not to the caller
             file_values[key] = str((Path(path).resolve().parent / v).resolve())
     return resolve(file_values, str(path) if path else "", cli_values)
+
+
+_TOML_TYPES = {
+    "float": ("a number", (int, float)), "int": ("a whole number", (int,)),
+    "bool": ("true or false", (bool,)), "str": ("a string", (str,)),
+    "path": ("a string (a file name)", (str,)), "percent": ("a number or a string like '1%'",
+                                                            (int, float, str)),
+}
+
+
+def _toml_type(v: Any) -> str:
+    return {bool: "a boolean", int: "a whole number", float: "a number", str: "a string",
+            list: "an array"}.get(type(v), type(v).__name__)
+
+
+def check_toml_type(o: Option, value: Any, where: str) -> None:
+    """Refuse a study file value of the wrong TOML type (no silent coercion).
+
+    ``forces = "9.6"`` (a string), ``phases = 180`` (not an array) and
+    ``stability = "yes"`` are refused with the expected type named; the
+    command line, whose values are text, is parsed by :func:`check_option`.
+    """
+    if o.kind in ("floats", "ints", "strs"):
+        item = {"floats": ("numbers", (int, float), "a number"),
+                "ints": ("whole numbers", (int,), "a whole number"),
+                "strs": ("strings", (str,), "a string")}[o.kind]
+        example = (f'["{value}"]' if o.kind == "strs" else f"[{value}]") \
+            if isinstance(value, (str, int, float)) and not isinstance(value, bool) else \
+            {"floats": "[180.0]", "ints": "[0, 1]", "strs": '["cone"]'}[o.kind]
+        if not isinstance(value, list):
+            raise InputError(o.name, value, f"a TOML array of {item[0]}, e.g. {o.name} = "
+                             f"{example}", f"{_toml_type(value)} in {where}")
+        for i, v in enumerate(value):
+            if isinstance(v, bool) or not isinstance(v, item[1]):
+                raise InputError(f"{o.name}[{i}]", v, f"{item[2]} (each item of {o.name})",
+                                 f"{_toml_type(v)} in {where}")
+        return
+    name, types = _TOML_TYPES[o.kind]
+    if (isinstance(value, bool) and o.kind != "bool") or not isinstance(value, types):
+        raise InputError(o.name, value, f"{name} (TOML type)", f"{_toml_type(value)} in {where}")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
