@@ -139,7 +139,12 @@ def run_pyharm(pyharm_python: str | None) -> dict:
     cmd = [py, str(Path(__file__).with_name("pyharm_jenkins.py")),
            "--levels", ",".join(f"{v:g}" for v in PYHARM_LEVELS), "--nh", "7", "--nti", "128"]
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=3600)
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:  # pyHarm writes a .pyHarm/ folder in its cwd
+        out = subprocess.run(
+            cmd, capture_output=True, text=True, env=env, timeout=3600, cwd=tmp
+        )
     if out.returncode != 0:
         row["pyharm"] = None
         row["note"] = f"pyHarm failed: {out.stderr.strip().splitlines()[-1:]}"
