@@ -38,7 +38,15 @@ def results(study) -> StudyResults:
 def one(results, damper, phase, force):
     (c,) = results.select(damper=damper, phase_deg=phase, force_n=force)
     assert c.branch.completed and not c.branch.failed, c.branch.message
+    assert c.peak_covered, c.peak_note()
     return c.summary()
+
+
+# Peaks are compared by their harmonic-1 amplitude (the vibration), as the paper's
+# harmonics 1-3 have no mean term: a stuck damper's mean position is set by its history,
+# and that offset (0.15 mm on the cylinder out of phase at 9.6 N, measured) is part of
+# max|x(t)| but not of the vibration.
+A = "h1_amplitude_mm"
 
 
 def test_the_screen_shows_the_coupling_the_rig_was_calibrated_for(study):
@@ -65,7 +73,7 @@ def test_out_of_phase_the_three_dampers_are_alike(results):
     for force in (MID, HIGH):
         s = [one(results, d, 180.0, force) for d in ("cone", "cylinder", "wedge")]
         e = np.array([x["friction_energy_mj"] for x in s])
-        a = np.array([x["peak_amplitude_mm"] for x in s])
+        a = np.array([x[A] for x in s])
         assert e.min() > 0.0
         assert np.ptp(e) < 0.15 * e.mean(), e
         assert np.ptp(a) < 0.15 * a.mean(), a
@@ -75,7 +83,7 @@ def test_in_phase_the_cylinder_rolls_and_stays_linear(results):
     """Receptance constant within 2 % and friction energy below 1e-9 of the cone's."""
     s = {f: one(results, "cylinder", 0.0, f) for f in (MID, HIGH)}
     cone = one(results, "cone", 0.0, HIGH)["friction_energy_mj"]
-    recept = np.array([x["peak_amplitude_mm"] / f for f, x in s.items()])
+    recept = np.array([x[A] / f for f, x in s.items()])
     assert np.ptp(recept) < 0.02 * recept.mean(), recept
     for x in s.values():
         assert abs(x["friction_energy_mj"]) < 1e-9 * cone, (x, cone)
@@ -91,9 +99,9 @@ def test_in_phase_the_wedge_softens(results):
 def test_in_phase_the_cone_levels_off_below_the_wedge(results):
     """The headline: A(30 N) / A(9.6 N) <= 1.3 for the cone (the paper: 8.7e-2 / 7.8e-2
     = 1.12), and its peak at 30 N is below the wedge's."""
-    a_mid = one(results, "cone", 0.0, MID)["peak_amplitude_mm"]
-    a_hi = one(results, "cone", 0.0, HIGH)["peak_amplitude_mm"]
-    wedge = one(results, "wedge", 0.0, HIGH)["peak_amplitude_mm"]
+    a_mid = one(results, "cone", 0.0, MID)[A]
+    a_hi = one(results, "cone", 0.0, HIGH)[A]
+    wedge = one(results, "wedge", 0.0, HIGH)[A]
     assert a_hi / a_mid <= 1.3, (a_mid, a_hi)
     assert a_hi < wedge, (a_hi, wedge)
 

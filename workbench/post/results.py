@@ -145,6 +145,9 @@ class CaseResult:
             "family": self.family, "force_n": self.force_n, "variant": self.variant,
             "peak_frequency_hz": float(self.freq_hz[i]) if ok else None,
             "peak_amplitude_mm": float(self.amp_mm[i]) if ok else None,
+            # the harmonic-1 peak, at its own frequency: the vibration without the mean
+            # (a stuck damper's mean position depends on its history, and it shifts max|x|)
+            **self._h1_peak(),
             "friction_energy_mj": float(self.energy_mj[i].sum()) if ok else None,
             "peak_stable": bool(self.stable[i]) if ok else None,
             "n_points": self.branch.n_points,
@@ -162,6 +165,12 @@ class CaseResult:
         out.update(self._peak_bound())
         return out
 
+    def _h1_peak(self) -> dict[str, Any]:
+        b = self.branch.summary(self.output)
+        a = b.get("h1_amplitude")
+        return {"h1_amplitude_mm": None if a is None else float(a) * 1e3,
+                "h1_peak_frequency_hz": b.get("h1_peak_frequency_hz")}
+
     def _peak_bound(self) -> dict[str, Any]:
         """Summary keys saying whether the peak was reached; a peak the curve did not reach
         is never reported as one: its values are None and its amplitude a lower bound."""
@@ -171,7 +180,7 @@ class CaseResult:
         if not covered and i >= 0:
             out["peak_lower_bound_mm"] = float(self.amp_mm[i])
             for k in ("peak_frequency_hz", "peak_amplitude_mm", "friction_energy_mj",
-                      "peak_stable", "peak_stability"):
+                      "peak_stable", "peak_stability", "h1_amplitude_mm", "h1_peak_frequency_hz"):
                 out[k] = None
         return out
 
