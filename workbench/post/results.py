@@ -133,11 +133,10 @@ class CaseResult:
         import h5py
 
         path = Path(path)
-        self.branch.save(path)
+        # the branch and the frame go into one temporary file, renamed over ``path`` at
+        # the end: a run killed in between never leaves a case file without its frame
         with atomic_path(path) as tmp:
-            import shutil
-
-            shutil.copyfile(path, tmp)
+            self.branch.save(tmp)
             with h5py.File(tmp, "a") as h:
                 g = h.require_group("case")
                 g["points"] = self.points
