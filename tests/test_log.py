@@ -50,3 +50,15 @@ def test_bad_switch_is_an_input_error(monkeypatch):
     monkeypatch.setattr(log, "_QUIET", False)
     with pytest.raises(InputError, match="UPD_PROGRESS"):
         log.bars_enabled()
+
+
+def test_numba_does_not_colour_through_colorama():
+    """colorama (a pyNastran dependency) must not be used by numba: its exit hook writes an
+    escape code to stdout and breaks --json (seen under mpirun)."""
+    import subprocess
+
+    code = ("import workbench, numba.core.errors as e; "
+            "assert not hasattr(e, 'ColorShell'), 'numba uses colorama'")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout == ""

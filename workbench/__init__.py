@@ -17,6 +17,13 @@ The sub-packages follow the data flow::
 Nothing below ``fe`` imports dolfinx or gmsh.
 """
 
+import os as _os
+
+# numba colours its messages with colorama when colorama is installed (pyNastran
+# brings it); colorama's exit hook then writes an escape code to stdout, which breaks
+# ``upd ... --json`` (seen under mpirun). Plain messages are enough for us.
+_os.environ.setdefault("NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING", "1")
+
 __version__ = "0.1.0"
 
 __all__ = ["__version__", "Model", "model", "frf", "receptance_figure", "status_figure",

@@ -190,7 +190,9 @@ class CaseResult:
         import h5py
 
         path = Path(path)
-        with atomic_path(path) as tmp:  # the file appears whole (a resume unit) or not at all
+        # the branch and the frame go into one temporary file, renamed over ``path`` at
+        # the end: a run killed in between never leaves a case file without its frame
+        with atomic_path(path) as tmp:
             self.branch.save(tmp)
             with h5py.File(tmp, "a") as h:
                 g = h.require_group("case")

@@ -149,29 +149,34 @@ def write_modes(out_dir: str | Path, body: str, shapes, freqs_hz: np.ndarray,
     return write_pvd(out / f"modes_{body}.pvd", entries, comment)
 
 
-def peak_relative_motion(case, system, assembled) -> np.ndarray | None:
+def peak_relative_motion(case, system) -> np.ndarray | None:
     """(n_pairs, 3) complex harmonic-1 relative displacement (pair frame t1, t2, n), m.
 
-    Recovered from the solved unknowns at the peak (``Branch.x``) with the
-    case's system; None when the branch has no point.
+    Read from the solved unknowns at the peak (``Branch.x``, the layout of
+    :mod:`workbench.hbm.balance`): in the "condensed" space they are the
+    harmonics of the active relative contact DOFs themselves (the non-zero
+    rows of the contacts' ``W``), in the "physical" space those of every
+    coordinate, mapped by ``W``. No solve is repeated. None when the branch
+    has no point.
     """
-    from ..hbm.balance import HarmonicBalance
     from ..hbm.fourier import Fourier
 
     b = case.branch
     i = case.peak_index
     if i < 0:
         return None
-    opts = b.options or {}
+    el = system.contacts
     fourier = Fourier(tuple(b.harmonics), b.nt)
-    f1 = assembled.excitation(case.phase_deg)
-    hb = HarmonicBalance(system, f1, fourier, None, b.level, b.space,
-                         opts.get("backend", "auto"), float(opts.get("dc_anchor", 0.0)))
-    omega = 2 * np.pi * float(b.freq_hz[i])
-    Q = hb.response(b.x[i].reshape(fourier.nh, -1), omega)  # (nh, n)
-    k1 = list(fourier.k).index(1)
-    q1 = Q[k1] - 1j * Q[k1 + 1]  # Q_1 = Qc - i Qs
-    return np.asarray(assembled.W @ q1).reshape(-1, 3)
+    X = np.asarray(b.x[i]).reshape(fourier.nh, -1)
+    k1 = int(np.flatnonzero(np.asarray(fourier.k) == 1)[0])  # Qc_1, then Qs_1
+    x1 = X[k1] - 1j * X[k1 + 1]
+    if b.space == "condensed":
+        act = np.flatnonzero(np.asarray(el.active).ravel())
+        u = np.zeros(3 * el.n_el, complex)
+        u[act] = x1
+    else:
+        u = np.asarray(el.W @ x1)
+    return u.reshape(-1, 3)
 
 
 def write_case_peak(path: str | Path, case, rel_pair_frame: np.ndarray | None = None,
@@ -233,7 +238,7 @@ def write_study_peaks(results, out: str | Path, prepared: dict[str, Any],
         rel = None
         if prep is not None:
             try:
-                rel = peak_relative_motion(c, prep.system, prep.assembled)
+                rel = peak_relative_motion(c, prep.system)
             except Exception as e:  # noqa: BLE001 - the file is a by-product; keep going
                 log.warning("%s: peak shape not recovered (%s)", c.case_id, e)
         if rel is None and has_shape(p, c.digest):
