@@ -287,8 +287,12 @@ def sobol_indices(design: Design, y: np.ndarray, seed: int = 0) -> dict[str, Any
         nan = [float("nan")] * len(design.names)
         out.update(S1=nan, S1_conf=nan, ST=nan, ST_conf=nan)
         return out
-    res = sobol.analyze(design.problem(), blocks[keep].ravel(), calc_second_order=False,
-                        num_resamples=200, seed=seed)
+    import warnings
+
+    with warnings.catch_warnings():  # pandas FutureWarning from inside SALib 1.5
+        warnings.simplefilter("ignore", FutureWarning)
+        res = sobol.analyze(design.problem(), blocks[keep].ravel(), calc_second_order=False,
+                            num_resamples=200, seed=seed)
     for k in ("S1", "S1_conf", "ST", "ST_conf"):
         out[k] = [float(v) for v in res[k]]
     return out
