@@ -245,3 +245,39 @@ def test_tiny_study_caches_resumes_grows_and_matches_on_two_ranks(tmp_path):
     assert dpar == digests
     for q in Q:
         assert np.array_equal(par[q], first[q]), q
+
+
+# ---- figures (synthetic outputs through the study's analysis) -------------------------------
+
+
+def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
+    from types import SimpleNamespace
+
+    from tests.conftest import assert_nonblank
+    from workbench.render.uncertainty_figures import uncertainty_figures
+
+    dists = {"mu": U.parse_distribution("mu", "normal 0.5 0.1 0.25 0.75"),
+             "seat-tilt": U.parse_distribution("t", "normal 0 0.01 -0.03 0.03")}
+    design = U.make_design(dists, 32, 1)
+    x = design.values
+    res = {}
+    for k, d in enumerate(("cone", "wedge")):
+        for ph in (0.0, 180.0):
+            pk = 0.3 + 0.1 * k + 0.2 * (x[:, 0] - 0.5) ** 2 + 5.0 * k * np.abs(x[:, 1])
+            res[(d, ph)] = {"peak_amplitude_mm": pk, "peak_frequency_hz": 312 + x[:, 0],
+                            "friction_energy_mj": x[:, 0] ** 2, "hbm_s": np.ones(len(pk)),
+                            "failed": np.zeros(len(pk), bool), "digests": [""] * len(pk)}
+    a = U.analyse(SimpleNamespace(uq_threshold=0.4, uq_seed=1), design, dists, res)
+    assert a["robust"] == {"in-phase": "cone", "out-of-phase": "cone"}
+    drivers = {(r["damper"], r["family"]): r["driver"] for r in a["groups"]}
+    assert drivers[("cone", "in-phase")] == "mu" and drivers[("wedge", "in-phase")] == "seat-tilt"
+    figs = uncertainty_figures(tmp_path / "figures", design, res, a)
+    assert {f["id"] for f in figs} >= {"violins", "exceedance", "tornado", "scatter"}
+    for f in figs:
+        assert_nonblank(tmp_path / f["path"])
+    U.write_h5(tmp_path / "u.h5", design, dists, res, a)
+    import h5py
+
+    with h5py.File(tmp_path / "u.h5", "r") as h:
+        assert h["samples/wedge/out-of-phase/peak_amplitude_mm"].shape == (design.n_rows,)
+        assert h["analysis/wedge/in-phase"].attrs["driver"] == "seat-tilt"
