@@ -598,8 +598,10 @@ def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) ->
 
     def work(k: int) -> dict[str, Any]:
         s = order[k]
+        c0 = time.process_time()
         prep = prepare_sample(bases[s.case.damper], s.case, s.tilt_deg)
         res = solve_case(prep, s.case)
+        res.timings["hbm_cpu"] = time.process_time() - c0  # this rank's CPU: the projection's
         res.save(case_dir / f"{s.case.digest}.h5")
         if res.branch.failed:
             log.warning("sample %s stopped early: %s", s.case.name, res.branch.message)
@@ -607,6 +609,7 @@ def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) ->
             log.info("sample %d/%d on rank %d: %s (%.1f s)", k + 1, len(order), rank,
                      s.case.name, res.timings.get("hbm", 0.0))
         return {"digest": s.case.digest, "hbm_s": float(res.timings.get("hbm", 0.0)),
+                "cpu_s": float(res.timings["hbm_cpu"]),
                 "failed": bool(res.branch.failed)}
 
     t0 = time.perf_counter()
@@ -621,11 +624,13 @@ def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) ->
                                "report": str(out / "report.html"), "ranks": size,
                                "n_samples": len(samples), "n_computed": len(order),
                                "n_reused": len(samples) - len(order), "schedule": sched}
+    t0 = time.perf_counter()
+    results = collect(samples, design, case_dir, comm)  # collective: a share per rank
     if rank == 0:
-        t0 = time.perf_counter()
-        results = collect(samples, design, case_dir)
         if records:
             write_json(out / "tables" / "schedule_records.json", records)
+        else:  # nothing computed: the report keeps the last computing run's schedule
+            sched = _previous_schedule(out) or sched
         analysis = analyse(spec, design, dists, results)
         summary.update(analysis_summary(analysis))
         timings["post and report"] = time.perf_counter() - t0  # before the report is written
@@ -640,22 +645,54 @@ def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) ->
 # ---- post-processing --------------------------------------------------------------------
 
 
-def collect(samples: list[Sample], design: Design, case_dir: Path) -> dict[tuple, dict]:
-    """(damper, phase) -> the design-ordered outputs of its samples (NaN where no peak)."""
+def _previous_schedule(out: Path) -> dict[str, Any] | None:
+    import json
+
+    try:
+        prev = json.loads((out / "uncertainty.json").read_text()).get("schedule")
+    except (OSError, ValueError):
+        return None
+    return prev if prev and prev.get("n_computed") else None
+
+
+def sample_output(case_dir: Path, s: Sample) -> dict[str, Any]:
+    """The scalar outputs of one finished sample (read from its case file)."""
+    res = CaseResult.load(case_dir / f"{s.case.digest}.h5")
+    summ = res.summary()
+    out = {q: (np.nan if summ.get(q) is None else float(summ[q])) for q, _, _ in QUANTITIES}
+    out.update(hbm_s=float(res.timings.get("hbm", np.nan)),
+               cpu_s=float(res.timings.get("hbm_cpu", np.nan)), failed=bool(res.branch.failed))
+    return out
+
+
+def collect(samples: list[Sample], design: Design, case_dir: Path,
+            comm=None) -> dict[tuple, dict] | None:
+    """(damper, phase) -> the design-ordered outputs of its samples (NaN where no peak).
+
+    Under MPI each rank reads a share of the case files (rank r: samples r,
+    r + P, ...) and rank 0 assembles them (the other ranks get None): the
+    serial part of the post-processing does not grow with the sample count.
+    """
+    rank = 0 if comm is None else comm.rank
+    size = 1 if comm is None else comm.size
+    mine = [(k, sample_output(case_dir, samples[k])) for k in range(rank, len(samples), size)]
+    if comm is not None:
+        parts = comm.gather(mine, root=0)
+        if rank != 0:
+            return None
+        mine = [x for part in parts for x in part]
+    outputs = dict(mine)
     groups: dict[tuple, dict] = {}
-    for s in samples:
+    for k, s in enumerate(samples):
         g = groups.setdefault((s.case.damper, s.case.phase_deg), {
             q: np.full(design.n_rows, np.nan) for q, _, _ in QUANTITIES})
         g.setdefault("hbm_s", np.full(design.n_rows, np.nan))
+        g.setdefault("cpu_s", np.full(design.n_rows, np.nan))
         g.setdefault("failed", np.zeros(design.n_rows, bool))
         g.setdefault("digests", [""] * design.n_rows)
-        res = CaseResult.load(case_dir / f"{s.case.digest}.h5")
-        summ = res.summary()
-        for q, _, _ in QUANTITIES:
-            v = summ.get(q)
-            g[q][s.row] = np.nan if v is None else float(v)
-        g["hbm_s"][s.row] = float(res.timings.get("hbm", np.nan))
-        g["failed"][s.row] = bool(res.branch.failed)
+        o = outputs[k]
+        for q in (*(q for q, _, _ in QUANTITIES), "hbm_s", "cpu_s", "failed"):
+            g[q][s.row] = o[q]
         g["digests"][s.row] = s.case.digest
     return groups
 
@@ -769,7 +806,9 @@ def write_h5(path: Path, design: Design, dists: dict[str, Distribution],
             for q, _, unit in QUANTITIES:
                 grp[q] = g[q]
                 grp[q].attrs["unit"] = unit
-            grp["hbm_s"] = g["hbm_s"]
+            grp["hbm_s"] = g["hbm_s"]  # wall time of the solve, s
+            # CPU time of the sample (its model and solve), s
+            grp["cpu_s"] = g.get("cpu_s", np.full_like(g["hbm_s"], np.nan))
             grp["failed"] = g["failed"]
             grp.attrs["digests"] = json.dumps(g["digests"])
         for r in a["groups"]:
