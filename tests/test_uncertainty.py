@@ -273,6 +273,10 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
     assert a["robust"] == {"in-phase": "cone", "out-of-phase": "cone"}
     drivers = {(r["damper"], r["family"]): r["driver"] for r in a["groups"]}
     assert drivers[("cone", "in-phase")] == "mu" and drivers[("wedge", "in-phase")] == "seat-tilt"
+    ans = U.answer_rows(a)
+    assert [(r["family"], r["rank"], r["damper"]) for r in ans][:2] == [
+        ("in-phase", 1, "cone"), ("in-phase", 2, "wedge")]
+    assert any("the cone has the smallest 95th-percentile peak" in x for x in U.headline(a))
     figs = uncertainty_figures(tmp_path / "figures", design, res, a)
     assert {f["id"] for f in figs} >= {"violins", "exceedance", "tornado", "scatter"}
     for f in figs:
