@@ -53,7 +53,7 @@ def plot_violins(design, results: dict[tuple, dict], path: str | Path) -> Path:
                 g = results.get((d, ph))
                 if g is None:
                     continue
-                y = g[q][ab]
+                y = np.where(np.asarray(g["failed"])[ab], np.nan, g[q][ab])
                 y = y[np.isfinite(y)]
                 if y.size == 0:
                     continue
@@ -90,9 +90,12 @@ def plot_violins(design, results: dict[tuple, dict], path: str | Path) -> Path:
     return save_figure(fig, path)
 
 
-def plot_exceedance(design, results: dict[tuple, dict], threshold: float | None,
+def plot_exceedance(design, results: dict[tuple, dict], thresholds: dict[str, float | None],
                     path: str | Path) -> Path:
-    """P(peak > x) against x per damper, one panel per family; the threshold dashed."""
+    """P(peak > x) against x per damper, one panel per family; the family's threshold dashed.
+
+    Samples whose solve stopped early (``failed``) are left out.
+    """
     plt = pyplot()
     fams, dampers = _families(results), _dampers(results)
     ab = design.ab_rows
@@ -103,13 +106,14 @@ def plot_exceedance(design, results: dict[tuple, dict], threshold: float | None,
             g = results.get((d, ph))
             if g is None:
                 continue
-            y = np.sort(g["peak_amplitude_mm"][ab])
-            y = y[np.isfinite(y)]
+            y = np.where(np.asarray(g["failed"])[ab], np.nan, g["peak_amplitude_mm"][ab])
+            y = np.sort(y[np.isfinite(y)])
             if y.size == 0:
                 continue
             p = 1.0 - np.arange(1, y.size + 1) / y.size
             ax.step(np.r_[y[0], y], np.r_[1.0, p], where="post", color=_color(d, k), label=d)
             ax.plot([np.quantile(y, 0.95)] * 2, [0, 0.05], color=_color(d, k), lw=2.5)
+        threshold = thresholds.get(family_name(ph))
         if threshold is not None:
             ax.axvline(threshold, color="k", ls="--", lw=1, label=f"threshold {threshold:.3g} mm")
         ax.axhline(0.05, color="0.5", ls=":", lw=1)
@@ -179,12 +183,14 @@ def plot_scatter(design, results: dict[tuple, dict], analysis: dict[str, Any],
         j = list(design.names).index(name)
         x = design.values[:, j]
         y = g["peak_amplitude_mm"]
-        ok = np.isfinite(y)
+        failed = np.asarray(g["failed"], bool) & np.isfinite(y)
+        ok = np.isfinite(y) & ~failed
         c = _color(r["damper"], dampers.index(r["damper"]))
         ax.scatter(x[ok], y[ok], s=10, color=c, alpha=0.7, lw=0)
-        if (~ok).any():
-            ax.scatter(x[~ok], np.full((~ok).sum(), np.nanmin(y) if ok.any() else 0), s=14,
-                       marker="x", color="k", label="no peak")
+        if failed.any():
+            ax.scatter(x[failed], y[failed], s=16, marker="x", color="k",
+                       label="solve stopped early\n(highest point reached)")
+            ax.legend(loc="best")
         ax.set_xlabel(_input_label(name))
         ax.set_ylabel("peak amplitude, mm")
         ax.set_title(f"{r['damper']}, {r['family']}", fontsize=10)
@@ -229,7 +235,7 @@ def uncertainty_figures(figdir: str | Path, design, results: dict[tuple, dict],
     made.append({"id": "violins", "path": "figures/uq_distributions.png", "caption":
                  "Peak amplitude, resonance frequency and friction energy over the samples, "
                  "the three dampers side by side in each family; thick bar: 95th percentile."})
-    plot_exceedance(design, results, analysis["threshold_mm"], figdir / "uq_exceedance.png")
+    plot_exceedance(design, results, analysis["thresholds_mm"], figdir / "uq_exceedance.png")
     made.append({"id": "exceedance", "path": "figures/uq_exceedance.png", "caption":
                  "Probability that the peak amplitude exceeds x; dashed: the threshold."})
     plot_tornado(analysis, figdir / "uq_sobol_peak.png")

@@ -699,57 +699,85 @@ def collect(samples: list[Sample], design: Design, case_dir: Path,
 
 def analyse(spec: StudySpec, design: Design, dists: dict[str, Distribution],
             results: dict[tuple, dict]) -> dict[str, Any]:
-    """Statistics of each quantity and Sobol indices per damper and family."""
+    """Statistics of each quantity and Sobol indices per damper and family.
+
+    A sample whose solve stopped early (``failed``) has no trustworthy peak
+    (the branch may stop on its way up): its outputs count as missing, in
+    the statistics (``n_missing``) and in the indices (its base point is
+    dropped). The dampers of a family are compared on the SAME samples: the
+    A and B rows every damper of the family solved (``p95_common``), which
+    decides the robust damper; ``p95`` over each damper's own solved rows is
+    reported beside. The threshold (``uq-threshold``, else 1.2 x the
+    family's median peak over every damper) is per family.
+    """
     ab = design.ab_rows
-    thr = spec.uq_threshold
-    if thr is None:
-        allpk = np.concatenate([g["peak_amplitude_mm"][ab] for g in results.values()])
-        allpk = allpk[np.isfinite(allpk)]
-        thr = 1.2 * float(np.median(allpk)) if allpk.size else None
+    clean = {}
+    for key, g in results.items():
+        bad = np.asarray(g["failed"], bool)
+        clean[key] = {q: np.where(bad, np.nan, g[q]) for q, _, _ in QUANTITIES}
+    fams = list(dict.fromkeys(ph for _, ph in results))
+    thresholds: dict[str, float | None] = {}
+    common: dict[float, np.ndarray] = {}
+    for ph in fams:
+        keys = [k for k in results if k[1] == ph]
+        ok = np.all([np.isfinite(clean[k]["peak_amplitude_mm"][ab]) for k in keys], axis=0)
+        common[ph] = ab[ok]
+        if spec.uq_threshold is not None:
+            thresholds[family_name(ph)] = float(spec.uq_threshold)
+        else:
+            pk = np.concatenate([clean[k]["peak_amplitude_mm"][ab] for k in keys])
+            pk = pk[np.isfinite(pk)]
+            thresholds[family_name(ph)] = 1.2 * float(np.median(pk)) if pk.size else None
     groups = []
     for (damper, phase), g in results.items():
-        row: dict[str, Any] = {"damper": damper, "phase_deg": phase,
-                               "family": family_name(phase), "stats": {}, "indices": {}}
+        fam = family_name(phase)
+        thr = thresholds[fam]
+        c = clean[(damper, phase)]
+        row: dict[str, Any] = {"damper": damper, "phase_deg": phase, "family": fam,
+                               "threshold_mm": thr, "stats": {}, "indices": {}}
         for q, _, _ in QUANTITIES:
-            row["stats"][q] = statistics(g[q][ab], thr if q == "peak_amplitude_mm" else None)
-            row["indices"][q] = sobol_indices(design, g[q], seed=spec.uq_seed)
+            row["stats"][q] = statistics(c[q][ab], thr if q == "peak_amplitude_mm" else None)
+            row["indices"][q] = sobol_indices(design, c[q], seed=spec.uq_seed)
+        pc = c["peak_amplitude_mm"][common[phase]]
+        row["stats"]["peak_amplitude_mm"]["n_common"] = int(pc.size)
+        if pc.size:
+            row["stats"]["peak_amplitude_mm"]["p95_common"] = float(np.quantile(pc, 0.95))
         row["driver"] = driver(row["indices"]["peak_amplitude_mm"])
-        row["n_failed"] = int(g["failed"].sum())
-        row["case_time_s"] = statistics(g["hbm_s"])
+        row["n_failed"] = int(np.asarray(g["failed"]).sum())
+        row["n_failed_ab"] = int(np.asarray(g["failed"])[ab].sum())
+        row["case_time_s"] = statistics(g.get("cpu_s", g["hbm_s"]))
         groups.append(row)
     robust = {}
-    for phase in dict.fromkeys(r["phase_deg"] for r in groups):
+    for phase in fams:
         cand = [r for r in groups if r["phase_deg"] == phase
-                and "p95" in r["stats"]["peak_amplitude_mm"]]
+                and "p95_common" in r["stats"]["peak_amplitude_mm"]]
         if cand:
-            best = min(cand, key=lambda r: r["stats"]["peak_amplitude_mm"]["p95"])
+            best = min(cand, key=lambda r: r["stats"]["peak_amplitude_mm"]["p95_common"])
             robust[family_name(phase)] = best["damper"]
-    return {"threshold_mm": thr, "groups": groups, "robust": robust,
+    return {"thresholds_mm": thresholds, "groups": groups, "robust": robust,
             "inputs": {k: d.describe() for k, d in dists.items()}}
 
 
 def analysis_summary(a: dict[str, Any]) -> dict[str, Any]:
-    rows = []
-    for r in a["groups"]:
-        st = r["stats"]["peak_amplitude_mm"]
-        rows.append({"damper": r["damper"], "family": r["family"],
-                     "peak_p95_mm": st.get("p95"), "peak_p50_mm": st.get("p50"),
-                     "p_exceed": st.get("p_exceed"), "driver": r["driver"],
-                     "n_failed": r["n_failed"]})
-    return {"threshold_mm": a["threshold_mm"], "groups": rows,
+    return {"thresholds_mm": a["thresholds_mm"], "groups": answer_rows(a),
             "smallest_p95_peak": a["robust"]}
+
+
+def _p95(r: dict[str, Any]) -> float:
+    return r["stats"]["peak_amplitude_mm"].get("p95_common", np.inf)
 
 
 def headline(a: dict[str, Any]) -> list[str]:
     lines = []
     for fam, best in a["robust"].items():
-        p95 = {r["damper"]: r["stats"]["peak_amplitude_mm"].get("p95") for r in a["groups"]
-               if r["family"] == fam}
-        if len(p95) < 2:
+        grp = {r["damper"]: r for r in a["groups"] if r["family"] == fam}
+        if len(grp) < 2:
             continue
-        others = ", ".join(f"{d} {v:.4g} mm" for d, v in p95.items() if d != best and v)
+        n = grp[best]["stats"]["peak_amplitude_mm"]["n_common"]
+        others = ", ".join(f"{d} {_p95(r):.4g} mm" for d, r in grp.items() if d != best)
         lines.append(f"{fam}: the {best} has the smallest 95th-percentile peak, "
-                     f"{p95[best]:.4g} mm ({others})")
+                     f"{_p95(grp[best]):.4g} mm ({others}; over the {n} samples every damper "
+                     "solved)")
     for r in a["groups"]:
         st = r["stats"]["peak_amplitude_mm"]
         if "p95" not in st:
@@ -758,26 +786,29 @@ def headline(a: dict[str, Any]) -> list[str]:
         pe = st.get("p_exceed")
         lines.append(
             f"{r['damper']}, {r['family']}: peak median {st['p50']:.4g} mm, 95th percentile "
-            f"{st['p95']:.4g} mm, P(peak > {a['threshold_mm']:.3g} mm) = "
+            f"{st['p95']:.4g} mm, P(peak > {r['threshold_mm']:.3g} mm) = "
             f"{pe:.2f}; driven by {r['driver'] or '?'}"
-            + (f" ({r['n_failed']} solves stopped early)" if r["n_failed"] else ""))
+            + (f" ({r['n_failed']} solves stopped early: left out)" if r["n_failed"] else ""))
     return lines
 
 
 def answer_rows(a: dict[str, Any]) -> list[dict[str, Any]]:
-    """Per family and damper: the 95th-percentile peak, its rank, P(exceed), the driver."""
+    """Per family, the dampers ranked by 95th-percentile peak (common samples), the driver."""
     rows = []
     for fam in dict.fromkeys(r["family"] for r in a["groups"]):
         grp = [r for r in a["groups"] if r["family"] == fam]
-        ranked = sorted(grp, key=lambda r: r["stats"]["peak_amplitude_mm"].get("p95", np.inf))
-        for k, r in enumerate(ranked):
+        for k, r in enumerate(sorted(grp, key=_p95)):
             st = r["stats"]["peak_amplitude_mm"]
             ind = r["indices"]["peak_amplitude_mm"]
             j = ind["names"].index(r["driver"]) if r["driver"] else None
             rows.append({"family": fam, "rank": k + 1, "damper": r["damper"],
-                         "peak_p50_mm": st.get("p50"), "peak_p95_mm": st.get("p95"),
-                         "p_exceed": st.get("p_exceed"), "driver": r["driver"],
+                         "peak_p50_mm": st.get("p50"),
+                         "peak_p95_common_mm": st.get("p95_common"),
+                         "n_common": st.get("n_common"), "peak_p95_mm": st.get("p95"),
+                         "threshold_mm": r["threshold_mm"], "p_exceed": st.get("p_exceed"),
+                         "driver": r["driver"],
                          "driver_ST": ind["ST"][j] if j is not None else None,
+                         "driver_ST_conf": ind["ST_conf"][j] if j is not None else None,
                          "failed_solves": r["n_failed"]})
     return rows
 
@@ -844,7 +875,8 @@ def write_h5(path: Path, design: Design, dists: dict[str, Distribution],
                 for k in ("S1", "S1_conf", "ST", "ST_conf"):
                     sq[k] = np.asarray(r["indices"][q][k], dtype=float)
             grp.attrs["driver"] = r["driver"] or ""
-        h.attrs["threshold_mm"] = a["threshold_mm"] if a["threshold_mm"] is not None else np.nan
+            grp.attrs["threshold_mm"] = np.nan if r["threshold_mm"] is None else r["threshold_mm"]
+        h.attrs["thresholds_mm"] = json.dumps(a["thresholds_mm"])
     return path
 
 
@@ -923,11 +955,14 @@ def _sections(spec: StudySpec, design: Design, a: dict[str, Any], sched: dict[st
             "damper is robust."],
          "figures": pick("violins", "exceedance"),
          "tables": [{"path": "tables/uncertainty_answer.csv", "caption":
-                     "per family, the dampers ranked by their 95th-percentile peak, with "
-                     f"P(peak > {a['threshold_mm']:.4g} mm) and the input that drives the "
-                     "spread (largest total Sobol index)"},
+                     "per family, the dampers ranked by their 95th-percentile peak over the "
+                     "samples every damper solved (p95_common; p95: each damper's own solved "
+                     "samples), P(peak > threshold) and the input that drives the spread "
+                     "(largest total Sobol index, with its bootstrap half-width)"},
                     {"path": "tables/uncertainty_stats.csv",
-                     "caption": f"statistics (threshold {a['threshold_mm']:.4g} mm)"}]},
+                     "caption": "statistics over the A and B rows (thresholds: " + ", ".join(
+                         f"{f} {t:.4g} mm" for f, t in a["thresholds_mm"].items()
+                         if t is not None) + "; solves stopped early are missing)"}]},
         {"id": "uq-sens", "title": "Sensitivity", "text": [
             "Sobol first-order (S1) and total-order (ST) indices of each output (SALib, "
             "with 95% bootstrap half-widths); the input with the largest ST drives the "
