@@ -287,3 +287,17 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
     with h5py.File(tmp_path / "u.h5", "r") as h:
         assert h["samples/wedge/out-of-phase/peak_amplitude_mm"].shape == (design.n_rows,)
         assert h["analysis/wedge/in-phase"].attrs["driver"] == "seat-tilt"
+
+
+def test_bad_uncertainty_inputs_exit_2_before_any_work(tmp_path):
+    from workbench.studies.spec import resolve
+
+    for values, needle in (({"uq-mu": "gauss 0.5 0.1"}, "uq-mu"),
+                           ({"uq-damping": "normal 0.002 0.01"}, "uq-damping"),
+                           ({"uq-kt": "normal 1 1"}, "uq-kt")):
+        with pytest.raises(InputError, match=needle):
+            U.study_distributions(resolve({"kind": "uncertainty", **values}))
+    r = run_upd("study", "--kind", "uncertainty", "--dampers", "cone", "--forces", "15,30",
+                "--out", tmp_path / "o")
+    assert r.code == 2 and "forces" in r.err and r.err.count("\n") == 1, r.err
+    assert not (tmp_path / "o" / "cache" / "fe").exists()
