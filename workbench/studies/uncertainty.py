@@ -552,9 +552,22 @@ def simulate_schedule(costs: list[float], ranks: int, *, static: bool) -> float:
 
 
 def _comm():
+    """MPI.COMM_WORLD when there are several ranks, else None.
+
+    ``runner._comm`` knows mpirun (OMPI_*, PMI_SIZE); under Slurm's ``srun
+    --mpi=pmix`` only PMIX_RANK and SLURM_NTASKS may be set, so those count too.
+    """
+    import os
+
     from .runner import _comm as comm
 
-    return comm()
+    c = comm()
+    if c is None and "PMIX_RANK" in os.environ and int(os.environ.get("SLURM_NTASKS", "1")) > 1:
+        from mpi4py import MPI
+
+        if MPI.COMM_WORLD.size > 1:
+            return MPI.COMM_WORLD
+    return c
 
 
 def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) -> dict[str, Any]:
