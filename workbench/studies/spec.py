@@ -175,7 +175,8 @@ OPTIONS: tuple[Option, ...] = (
            "uncertainty", lo=0, hi=2**31 - 1),
     Option("uq-threshold", "float", None, "uncertainty: peak amplitude threshold, mm (the "
            "report gives the probability of exceeding it; None: per family, 1.2 x the "
-           "median peak of every damper's samples)", "uncertainty", lo=0.0, lo_open=True, optional=True),
+           "median peak of every damper's samples)", "uncertainty", lo=0.0, lo_open=True,
+           optional=True),
     Option("uq-schedule", "str", "dynamic", "uncertainty: how samples spread over MPI ranks: "
            "dynamic (a shared counter, each rank takes the next sample when free) or static "
            "(round-robin, for comparison)", "uncertainty", choices=("dynamic", "static")),
