@@ -55,6 +55,10 @@ def _run(spec, out: Path, args: argparse.Namespace) -> dict:
         from ..studies.robustness import run_robustness
 
         return run_robustness(spec, out, force=args.force)
+    if spec.kind == "uncertainty":  # sampled inputs: distributions, Sobol indices (MPI)
+        from ..studies.uncertainty import run_uncertainty
+
+        return run_uncertainty(spec, out, force=args.force)
     results = run_study(spec, out, force=args.force)
     summary = {
         "study": spec.name, "kind": spec.kind, "out": str(out),

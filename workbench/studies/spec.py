@@ -20,7 +20,7 @@ from ..config import read_toml
 from ..errors import InputError, check_choice, check_int, check_range, did_you_mean
 
 DAMPERS = ("cone", "cylinder", "wedge")
-KINDS = ("comparison", "sweep", "fidelity", "robustness")
+KINDS = ("comparison", "sweep", "fidelity", "robustness", "uncertainty")
 # robustness study: the named solution methods and hard cases (defined in
 # workbench/studies/robustness.py; the names are here so the options can check them)
 ROBUSTNESS_METHODS = ("default", "fd-jacobian", "ls-basic", "ls-l2", "ls-cp",
@@ -147,6 +147,39 @@ OPTIONS: tuple[Option, ...] = (
            lo_open=True, hi=100.0),
     Option("time-check", "bool", True, "robustness: check the harmonic balance against time "
            "integration at its suspect points (small models)", "robustness"),
+    # ---- uncertainty study options (kind = "uncertainty"; workbench/studies/uncertainty.py) --
+    # a distribution is "uniform LO HI", "normal MEAN SD [LO HI]" or
+    # "lognormal MEDIAN SIGMA_LN [LO HI]" (bounds truncate); cf, kt, kn are factors on the
+    # nominal value (study option or geometry/contact.toml), mu and damping absolute values,
+    # seat-tilt the misalignment of one side's seat, deg
+    Option("uq-inputs", "strs", ["mu", "cf", "kt", "kn", "damping", "seat-tilt"],
+           "uncertainty: the inputs that vary (the others stay nominal)", "uncertainty",
+           choices=("mu", "cf", "kt", "kn", "damping", "seat-tilt")),
+    Option("uq-mu", "str", "normal 0.5 0.1 0.25 0.75", "uncertainty: friction coefficient",
+           "uncertainty"),
+    Option("uq-cf", "str", "normal 1 0.1 0.7 1.3", "uncertainty: factor on the nominal "
+           "centrifugal force", "uncertainty"),
+    Option("uq-kt", "str", "lognormal 1 0.5 0.25 4", "uncertainty: factor on the nominal "
+           "tangential contact stiffness (line and face)", "uncertainty"),
+    Option("uq-kn", "str", "lognormal 1 0.5 0.25 4", "uncertainty: factor on the nominal "
+           "normal contact stiffness (line and face)", "uncertainty"),
+    Option("uq-damping", "str", "lognormal 0.002 0.3 0.001 0.004", "uncertainty: modal "
+           "damping ratio", "uncertainty"),
+    Option("uq-seat-tilt", "str", "normal 0 0.01 -0.03 0.03", "uncertainty: seat "
+           "misalignment of one side, deg (tilts the preload along the line or face; "
+           "opens one end when large)", "uncertainty"),
+    Option("uq-samples", "int", 16, "uncertainty: base samples N per damper and family "
+           "(Saltelli design: N (D + 2) cases; a power of 2; a larger N reuses a smaller)",
+           "uncertainty", lo=2, hi=1 << 20),
+    Option("uq-seed", "int", 2026, "uncertainty: seed of the scrambled Sobol sequence",
+           "uncertainty", lo=0, hi=2**31 - 1),
+    Option("uq-threshold", "float", None, "uncertainty: peak amplitude threshold, mm (the "
+           "report gives the probability of exceeding it; None: per family, 1.2 x the "
+           "median peak of every damper's samples)", "uncertainty", lo=0.0, lo_open=True,
+           optional=True),
+    Option("uq-schedule", "str", "dynamic", "uncertainty: how samples spread over MPI ranks: "
+           "dynamic (a shared counter, each rank takes the next sample when free) or static "
+           "(round-robin, for comparison)", "uncertainty", choices=("dynamic", "static")),
 )
 
 BY_NAME = {o.name: o for o in OPTIONS}
