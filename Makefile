@@ -17,8 +17,10 @@ export PYVISTA_OFF_SCREEN ?= true
 setup:
 	@sh scripts/setup.sh
 
-## the main job: the paper's damper comparison, cases spread over $(NP) MPI ranks
+## the main job: the paper's damper comparison on the paper-like rig, then on the heavy
+## default rig (docs/FINDINGS.md sets them side by side); cases spread over $(NP) MPI ranks
 run: setup
+	$(MPIRUN) $(UPD) study studies/paper_rig.toml --out $(OUT)/paper_rig
 	$(MPIRUN) $(UPD) study studies/paper.toml --out $(OUT)/paper
 
 ## the default (fast) test suite
