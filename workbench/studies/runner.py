@@ -546,7 +546,7 @@ def headline(results: StudyResults) -> list[str]:
             ok = [c for c in cs if c.peak_index >= 0]
             if not ok:
                 continue
-            top = max(ok, key=lambda c: (c.force_n, -c.summary()["peak_amplitude_mm"]))
+            top = max(ok, key=lambda c: (c.force_n, -float(c.amp_mm[c.peak_index])))
             s = top.summary()
             # a sweep has several cases per damper and force: name the one quoted
             which = f" ({top.variant.replace('=', ' = ')})" if top.variant else ""
