@@ -1,0 +1,835 @@
+"""Nonlinear modes by the extended periodic motion concept (EPMC, Krack 2015).
+
+A negative mass-proportional damping term ``-xi M q'`` is added to the
+autonomous equation of motion of the reduced model with its friction
+contacts,
+
+    M q'' + (C - xi M) q' + K q + W^T f(W q) = f_static,
+
+so that the free motion of a damped mode becomes periodic: ``xi`` (1/s)
+supplies exactly the energy the viscous damping and the friction take per
+cycle. The periodic motion is expanded in the harmonic list of
+:mod:`.fourier` (the same AFT march, contact law and preload balance as the
+forced response, :mod:`.balance`) and continued in the modal amplitude
+``a`` (sqrt(kg) m): the harmonics are ``Q = a psi`` with the mass
+normalisation of the harmonic-1 shape and a phase condition,
+
+    psi_c1^T M psi_c1 + psi_s1^T M psi_s1 = 1,   psi_s1^T M phi = 0
+
+(``phi`` the mass-normalised linear mode with every contact stuck). The
+unknowns of one point are ``psi`` (all DOFs, all harmonics), ``omega``
+(rad/s) and ``xi``; the modal damping ratio is ``D = xi / (2 omega)``, the
+system's own viscous damping included (in the linear limit ``D`` is the
+modal ratio ``zeta`` of the mode, and ``omega`` its stuck frequency).
+
+Residual (physical space, per unit modal amplitude), for harmonic ``k``
+with ``A = K_r - (k w)^2 M`` and ``B = k w (C - xi M)``::
+
+    Rc_k = A psi_c + B psi_s + W^T Gc_k / a,   Rs_k = A psi_s - B psi_c + W^T Gs_k / a
+
+plus ``K_r psi_0 + W^T (G_0 - f(0)) / a`` for harmonic 0 (``G = f - K_c u``
+as in :mod:`.balance`). The Jacobian is analytic (the AFT's exact
+derivative for the contacts); each point is solved by PETSc SNES (Newton
+with a backtracking line search, a dense LU of the bordered Jacobian).
+
+The result, :class:`NlModeBranch`, holds per point the modal amplitude,
+frequency, ``xi``, damping ratio, friction energy per element and per
+cycle, contact status, the energy balance of the point, the MAC of the
+harmonic-1 shape against the low-amplitude one, the share of the motion in
+the higher harmonics, the output amplitudes, and ``psi`` (so that
+:mod:`.synthesis` can rebuild the forced response at any force level).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from ..errors import InputError, SolveError, check_int, check_range
+from .aft import aft, work_per_cycle
+from .balance import loop_dissipation, observation
+from .fourier import Fourier
+from .system import System, modal_damping
+
+log = logging.getLogger(__name__)
+
+TWO_PI = 2.0 * np.pi
+
+_ARRAYS = (
+    "amplitude",
+    "freq_hz",
+    "xi",
+    "xi_viscous",
+    "damping_ratio",
+    "friction_energy",
+    "status",
+    "energy_residual",
+    "work_friction",
+    "work_viscous",
+    "mac",
+    "higher_harmonics",
+    "out_amp",
+    "out_h1",
+    "newton_its",
+    "psi",
+)
+
+
+@dataclass
+class NlModeBranch:
+    """A backbone: one nonlinear mode against its modal amplitude (arrays per point).
+
+    ``amplitude`` (sqrt(kg) m: the harmonic-1 motion is ``a psi_1`` with
+    ``psi_1^H M psi_1 = 1``), ``freq_hz``, ``xi`` (1/s), ``damping_ratio``
+    (``xi / 2 omega``), ``xi_viscous`` (1/s: ``psi_1^H C psi_1``, the viscous
+    share of ``xi``), ``friction_energy`` (n_el, J per cycle), ``status``
+    (n_el: 0 stuck, 1 stick-slip, 2 partial, 3 full separation),
+    ``energy_residual`` (relative: energy fed by ``xi`` against viscous +
+    contact work), ``work_friction`` / ``work_viscous`` (J per cycle),
+    ``mac`` (of the harmonic-1 shape against the first point, mass
+    weighted), ``higher_harmonics`` (share of the kinetic-energy norm in
+    harmonics other than 1), ``out_amp`` / ``out_h1`` (n_out: the largest
+    ``|y(t)|`` and the harmonic-1 amplitude of each output, model length
+    unit), ``newton_its``, ``psi`` (nh * n: the harmonics per unit modal
+    amplitude, layout of :mod:`.fourier`).
+    """
+
+    mode: int
+    f_stuck_hz: float
+    linear_hz: np.ndarray  # every linear (stuck) frequency of the model, Hz
+    harmonics: tuple[int, ...]
+    nt: int
+    n: int
+    output_names: tuple[str, ...]
+    amplitude: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    freq_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    xi: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    xi_viscous: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    damping_ratio: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    friction_energy: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    status: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), np.int8))
+    energy_residual: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    work_friction: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    work_viscous: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    mac: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    higher_harmonics: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    out_amp: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    out_h1: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    newton_its: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+    psi: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    completed: bool = False
+    failed: bool = False
+    message: str = ""
+    timings: dict[str, float] = field(default_factory=dict)
+    label: str = ""
+
+    @property
+    def n_points(self) -> int:
+        return int(self.amplitude.size)
+
+    @property
+    def fourier(self) -> Fourier:
+        return Fourier(self.harmonics, self.nt)
+
+    def psi_of(self, i: int) -> np.ndarray:
+        """(nh, n) harmonics per unit modal amplitude at point ``i``."""
+        return self.psi[i].reshape(len(self.fourier.k), self.n)
+
+    def psi1(self) -> np.ndarray:
+        """(n_points, n) complex harmonic-1 shapes ``psi_c1 - i psi_s1``."""
+        f = self.fourier
+        c = f.index(1, "c")
+        P = self.psi.reshape(self.n_points, f.nh, self.n)
+        return P[:, c] - 1j * P[:, c + 1]
+
+    def summary(self) -> dict[str, Any]:
+        """The numbers the CLI prints for this backbone."""
+        if not self.n_points:
+            return dict(mode=self.mode, n_points=0, completed=self.completed,
+                        failed=self.failed, message=self.message)
+        i = int(np.argmax(self.damping_ratio))
+        return dict(
+            mode=self.mode,
+            f_stuck_hz=self.f_stuck_hz,
+            freq_first_hz=float(self.freq_hz[0]),
+            freq_last_hz=float(self.freq_hz[-1]),
+            damping_first=float(self.damping_ratio[0]),
+            damping_max=float(self.damping_ratio[i]),
+            amplitude_at_damping_max=float(self.amplitude[i]),
+            freq_at_damping_max_hz=float(self.freq_hz[i]),
+            amplitude_range=[float(self.amplitude[0]), float(self.amplitude[-1])],
+            mac_min=float(self.mac.min()),
+            energy_residual_max=float(self.energy_residual.max()),
+            n_points=self.n_points,
+            newton_its=int(self.newton_its.sum()),
+            wall_s=round(float(self.timings.get("total", 0.0)), 4),
+            completed=self.completed,
+            failed=self.failed,
+            message=self.message,
+        )
+
+    # -- files -------------------------------------------------------------------
+    def save(self, path: str | Path) -> Path:
+        """Write to HDF5 atomically."""
+        import h5py
+
+        from ..io import atomic_path
+
+        path = Path(path)
+        with atomic_path(path) as tmp, h5py.File(tmp, "w") as h:
+            for name in _ARRAYS:
+                h.create_dataset(name, data=getattr(self, name))
+            h.create_dataset("linear_hz", data=self.linear_hz)
+            a = h.attrs
+            for name in ("mode", "f_stuck_hz", "nt", "n", "completed", "failed", "message",
+                         "label"):
+                a[name] = getattr(self, name)
+            a["harmonics"] = np.asarray(self.harmonics, dtype=int)
+            a["output_names"] = json.dumps(list(self.output_names))
+            a["timings"] = json.dumps(self.timings)
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> NlModeBranch:
+        import h5py
+
+        with h5py.File(path, "r") as h:
+            kw = {name: h[name][()] for name in _ARRAYS}
+            a = h.attrs
+            return cls(
+                mode=int(a["mode"]), f_stuck_hz=float(a["f_stuck_hz"]),
+                linear_hz=h["linear_hz"][()], harmonics=tuple(int(v) for v in a["harmonics"]),
+                nt=int(a["nt"]), n=int(a["n"]),
+                output_names=tuple(json.loads(a["output_names"])),
+                completed=bool(a["completed"]), failed=bool(a["failed"]),
+                message=str(a["message"]), label=str(a["label"]),
+                timings=json.loads(a["timings"]), **kw)
+
+    def to_csv(self, path: str | Path, unit: str = "m") -> Path:
+        """One row per point: amplitude, frequency, damping, energy, status counts, outputs."""
+        from ..post.tables import write_rows_csv
+
+        rows = []
+        for i in range(self.n_points):
+            st = self.status[i] if self.status.size else np.zeros(0, int)
+            row = {
+                "modal_amplitude": float(self.amplitude[i]),
+                "freq_hz": float(self.freq_hz[i]),
+                "damping_ratio": float(self.damping_ratio[i]),
+                "xi_per_s": float(self.xi[i]),
+                "friction_energy_j": float(self.friction_energy[i].sum()),
+                "n_stuck": int(np.sum(st == 0)),
+                "n_stick_slip": int(np.sum(st == 1)),
+                "n_partial_sep": int(np.sum(st == 2)),
+                "n_separated": int(np.sum(st == 3)),
+                "mac": float(self.mac[i]),
+                "higher_harmonics": float(self.higher_harmonics[i]),
+                "energy_residual": float(self.energy_residual[i]),
+            }
+            for j, nm in enumerate(self.output_names):
+                row[f"{nm}_amp_{unit}"] = float(self.out_amp[i, j])
+            rows.append(row)
+        return write_rows_csv(path, rows)
+
+
+# -- the problem ---------------------------------------------------------------------
+class Epmc:
+    """Residual and Jacobian of the extended periodic motion concept for one linear mode."""
+
+    def __init__(
+        self,
+        system: System,
+        fourier: Fourier,
+        mode: int,
+        outputs: object = None,
+        dc_anchor: float = 1e-3,
+    ):
+        if 1 not in fourier.harmonics:
+            raise InputError("harmonics", list(fourier.harmonics), "a list that includes 1")
+        self.system, self.fourier = system, fourier
+        n = self.n = system.n
+        self.M = system.M
+        self.Kr = system.regularised_stiffness()
+        if system.C is not None:
+            self.C = system.C
+        elif system.zeta is not None:
+            self.C = modal_damping(system.M, system.K, system.zeta, system.contacts)
+        else:
+            self.C = np.zeros((n, n))
+        lam, phi = sla.eigh(self.Kr, self.M)
+        if lam.min() <= 1e-12 * max(abs(lam).max(), 1e-300):
+            raise SolveError(
+                "the linear system with every contact stuck is singular: a rigid-body mode is "
+                "held by no support and no contact element")
+        self.wn = np.sqrt(lam)
+        mode = check_int("mode", mode, 0, n - 1)
+        self.mode = mode
+        self.phi = phi[:, mode]
+        self.Mphi = self.M @ self.phi
+        self.w_lin = float(self.wn[mode])
+        self.xi_lin = float(self.phi @ self.C @ self.phi)
+        self.el = system.contacts
+        self.n_el = system.n_el
+        self.n3 = 3 * self.n_el
+        nh = fourier.nh
+        self.nh = nh
+        self.N = nh * n
+        if self.n_el:
+            self.W = self.el.W
+            self.kc = self.el.kc
+            self.Wh = sp.kron(sp.identity(nh, format="csr"), self.W, format="csr")
+            self.f_rest = self.el.force_at_rest().ravel()
+        else:
+            self.W = sp.csr_matrix((0, n))
+            self.kc = np.zeros((0, 3))
+            self.Wh = sp.csr_matrix((0, self.N))
+            self.f_rest = np.zeros(0)
+        self.anchor = np.zeros((self.n_el, 3))
+        self._rigid = system.rigid_modes()
+        if self.n_el and dc_anchor > 0 and self._rigid.shape[1]:
+            self.anchor[:, 0] = dc_anchor * self.el.kt1
+            self.anchor[:, 1] = dc_anchor * self.el.kt2
+        self.O = observation(system, outputs)
+        self.c1 = fourier.index(1, "c")
+        # sparse pattern of the contact Jacobian (rows (h, e, a), cols (c, e, b))
+        if self.n_el:
+            e, a, h, b, c = np.meshgrid(np.arange(self.n_el), np.arange(3), np.arange(nh),
+                                        np.arange(3), np.arange(nh), indexing="ij")
+            self._drow = (h * self.n3 + 3 * e + a).ravel()
+            self._dcol = (c * self.n3 + 3 * e + b).ravel()
+        self._lin_cache: tuple | None = None
+        self.stats = dict(n_residual=0, n_jacobian=0, t_aft=0.0)
+
+    # -- pieces ----------------------------------------------------------------------
+    def contact(self, Q: np.ndarray, want_jac: bool = True):
+        """(G (nh, n3), D sparse or None, AftResult) at the harmonics Q (nh, n)."""
+        f = self.fourier
+        if not self.n_el:
+            return np.zeros((f.nh, 0)), None, None
+        t0 = time.perf_counter()
+        U = np.asarray((self.W @ Q.T).T)  # (nh, n3)
+        Uloc = U.reshape(f.nh, self.n_el, 3)
+        res = aft(Uloc, self.el, f, want_jac=want_jac)
+        G = res.F - self.kc[None] * Uloc
+        if f.has_dc and self.anchor.any():
+            G[0] += self.anchor * Uloc[0]
+        D = None
+        if want_jac:
+            J = res.J.copy()
+            hh = np.arange(f.nh)
+            for a in range(3):
+                J[:, a, hh, a, hh] -= self.kc[:, a][:, None]
+            if f.has_dc:
+                for a in range(2):
+                    J[:, a, 0, a, 0] += self.anchor[:, a]
+            D = sp.csr_matrix((J.ravel(), (self._drow, self._dcol)),
+                              shape=(f.nh * self.n3, f.nh * self.n3))
+        self.stats["t_aft"] += time.perf_counter() - t0
+        return G.reshape(f.nh, self.n3), D, res
+
+    def _linear(self, P: np.ndarray, w: float, xi: float) -> np.ndarray:
+        """The linear part on harmonics P (nh, n): K_r P0; A Pc + B Ps; A Ps - B Pc."""
+        f = self.fourier
+        out = np.empty_like(P)
+        if f.has_dc:
+            out[0] = self.Kr @ P[0]
+        Cx = self.C - xi * self.M
+        for k, c, s in f.pairs():
+            A_c = self.Kr @ P[c] - (k * w) ** 2 * (self.M @ P[c])
+            A_s = self.Kr @ P[s] - (k * w) ** 2 * (self.M @ P[s])
+            B_c = k * w * (Cx @ P[c])
+            B_s = k * w * (Cx @ P[s])
+            out[c] = A_c + B_s
+            out[s] = A_s - B_c
+        return out
+
+    def residual(self, y: np.ndarray, a: float, want_jac: bool = False):
+        """Residual (N + 2,) at ``y = [psi, w, xi]`` and modal amplitude ``a`` (and Jacobian)."""
+        f, n = self.fourier, self.n
+        psi = y[: self.N].reshape(f.nh, n)
+        w, xi = float(y[self.N]), float(y[self.N + 1])
+        G, D, res = self.contact(a * psi, want_jac)
+        R = self._linear(psi, w, xi)
+        if self.n_el:
+            Gs = G.copy()
+            if f.has_dc:
+                Gs[0] = Gs[0] - self.f_rest
+            R = R + np.asarray((self.W.T @ Gs.T).T) / a
+        if f.has_dc and self.system.static_force is not None:
+            R[0] = R[0] - self.system.static_force / a
+        c = self.c1
+        amp = float(psi[c] @ self.M @ psi[c] + psi[c + 1] @ self.M @ psi[c + 1]) - 1.0
+        phase = float(psi[c + 1] @ self.Mphi)
+        r = np.concatenate([R.ravel(), [amp, phase]])
+        self.stats["n_residual"] += 1
+        if not want_jac:
+            return r, res
+        self.stats["n_jacobian"] += 1
+        N = self.N
+        J = np.zeros((N + 2, N + 2))
+        Cx = self.C - xi * self.M
+        if f.has_dc:
+            J[:n, :n] = self.Kr
+        dw = np.zeros((f.nh, n))
+        dxi = np.zeros((f.nh, n))
+        for k, c_, s in f.pairs():
+            A = self.Kr - (k * w) ** 2 * self.M
+            B = k * w * Cx
+            rc, rs = slice(c_ * n, (c_ + 1) * n), slice(s * n, (s + 1) * n)
+            J[rc, rc] = A
+            J[rc, rs] = B
+            J[rs, rc] = -B
+            J[rs, rs] = A
+            dA = -2 * k * k * w * self.M
+            dB = k * Cx
+            dw[c_] = dA @ psi[c_] + dB @ psi[s]
+            dw[s] = dA @ psi[s] - dB @ psi[c_]
+            dxi[c_] = -k * w * (self.M @ psi[s])
+            dxi[s] = k * w * (self.M @ psi[c_])
+        if self.n_el:
+            J[:N, :N] += (self.Wh.T @ D @ self.Wh).toarray()
+        J[:N, N] = dw.ravel()
+        J[:N, N + 1] = dxi.ravel()
+        J[N, c * n:(c + 1) * n] = 2 * (self.M @ psi[c])
+        J[N, (c + 1) * n:(c + 2) * n] = 2 * (self.M @ psi[c + 1])
+        J[N + 1, (c + 1) * n:(c + 2) * n] = self.Mphi
+        return r, res, J
+
+    def linear_guess(self) -> np.ndarray:
+        """``y`` of the linear mode with every contact stuck (exact as ``a -> 0``)."""
+        y = np.zeros(self.N + 2)
+        y[self.c1 * self.n:(self.c1 + 1) * self.n] = self.phi
+        y[self.N] = self.w_lin
+        y[self.N + 1] = self.xi_lin
+        return y
+
+    def lost_contact(self, res) -> bool:
+        """True if at some instant the closed contacts no longer hold a body held only by them."""
+        if res is None or not np.any(res.n_sep) or not self._rigid.shape[1]:
+            return False
+        WV = np.asarray(self.W @ self._rigid)
+        r = WV.shape[1]
+        for pat in np.unique(res.contact.T, axis=0):
+            A = WV[np.repeat(pat, 3)]
+            if A.shape[0] < r:
+                return True
+            s = np.linalg.svd(A, compute_uv=False)
+            if s.size < r or s[-1] <= 1e-9 * max(np.abs(WV).max(), 1e-300):
+                return True
+        return False
+
+    def point(self, y: np.ndarray, a: float, phi1_ref: np.ndarray | None) -> dict[str, Any]:
+        """Everything kept about one converged point."""
+        f, n = self.fourier, self.n
+        psi = y[: self.N].reshape(f.nh, n)
+        w, xi = float(y[self.N]), float(y[self.N + 1])
+        Q = a * psi
+        G, _, res = self.contact(Q, want_jac=False)
+        nabla = f.nabla(w)
+        V = nabla @ Q  # velocity harmonics
+        # energy fed by -xi M q' and taken by C q' per cycle: pi/w * sum over harmonics
+        def quad(A: np.ndarray) -> float:
+            tot = 0.0
+            for _k, c_, s in f.pairs():
+                tot += float(V[c_] @ A @ V[c_] + V[s] @ A @ V[s])
+            return np.pi / w * tot
+
+        w_in = xi * quad(self.M)
+        w_visc = quad(self.C)
+        if self.n_el:
+            Uloc = np.asarray((self.W @ Q.T).T).reshape(f.nh, self.n_el, 3)
+            wc = work_per_cycle(res.F, Uloc, f)
+            w_contact = float(wc.sum())
+            w_fric = float(wc[:, :2].sum())
+            fric = loop_dissipation(res.u, res.f)
+            status = res.status
+        else:
+            w_contact = w_fric = 0.0
+            fric, status = np.zeros(0), np.zeros(0, np.int8)
+        den = max(abs(w_in), abs(w_visc) + abs(w_contact), 1e-300)
+        e_res = abs(w_in - w_visc - w_contact) / den
+        c = self.c1
+        p1 = psi[c] - 1j * psi[c + 1]
+        ref = p1 if phi1_ref is None else phi1_ref
+        mac = float(abs(np.conj(ref) @ self.M @ p1) ** 2
+                    / (np.real(np.conj(ref) @ self.M @ ref) * np.real(np.conj(p1) @ self.M @ p1)))
+        ke = [float(psi[c_] @ self.M @ psi[c_] + psi[s] @ self.M @ psi[s]) * k * k
+              for k, c_, s in f.pairs()]
+        hk = [k for k, _, _ in f.pairs()]
+        total = sum(ke)
+        higher = (total - ke[hk.index(1)]) / total if total > 0 else 0.0
+        Y = Q @ self.O.T
+        return dict(
+            amplitude=a, freq_hz=w / TWO_PI, xi=xi, damping_ratio=xi / (2 * w),
+            xi_viscous=float(np.real(np.conj(p1) @ self.C @ p1)),
+            friction_energy=fric, status=status, energy_residual=e_res, work_friction=w_fric,
+            work_viscous=w_visc, mac=mac, higher_harmonics=higher,
+            out_amp=f.amplitude(Y), out_h1=f.h1_amplitude(Y), psi=y[: self.N].copy(),
+            lost=self.lost_contact(res), phi1=p1,
+        )
+
+
+# -- the corrector: PETSc SNES with the dense analytic Jacobian ------------------------
+class _Snes:
+    """Newton (SNES, backtracking line search, dense LU) on the bordered system.
+
+    Unknowns ``Y = [y / scale, s]`` with ``s = ln a``; equations
+    ``[r(y; e^s) * row_scale, c . (Y - Yp)]``: the constraint ``c`` is ``e_s``
+    for a point at a given amplitude, or the secant for a pseudo-arc-length
+    step (which passes a fold of the backbone in amplitude).
+    """
+
+    def __init__(self, prob: Epmc, tol: float, tol_stall: float, max_it: int,
+                 line_search: str = "bt"):
+        from petsc4py import PETSc
+
+        self.prob = prob
+        N = prob.N + 2
+        n = N + 1
+        self.n = n
+        comm = PETSc.COMM_SELF
+        self.snes = PETSc.SNES().create(comm)
+        prefix = f"upd_epmc{id(self)}_"
+        self.snes.setOptionsPrefix(prefix)
+        po = PETSc.Options()
+        po[f"{prefix}snes_linesearch_type"] = line_search
+        self.F = PETSc.Vec().createSeq(n, comm=comm)
+        self.X = PETSc.Vec().createSeq(n, comm=comm)
+        self.J = PETSc.Mat().createDense((n, n), comm=comm)
+        self.J.setUp()
+        # scaling: psi as it is, w and xi by the linear frequency; rows by w^2 max(M)
+        self.s = np.ones(N)
+        self.s[prob.N] = prob.w_lin
+        self.s[prob.N + 1] = prob.w_lin
+        self.rs = np.ones(N)
+        self.rs[: prob.N] = 1.0 / (prob.w_lin**2 * max(np.abs(np.diag(prob.M)).max(), 1e-300))
+        self.c = np.zeros(n)
+        self.c[-1] = 1.0
+        self.c0 = 0.0
+        me = self
+
+        def function(snes, X, F):
+            Y = X.getArray(readonly=True)
+            r, _ = me.prob.residual(Y[:N] * me.s, float(np.exp(Y[N])))
+            out = F.getArray()
+            out[:N] = r * me.rs
+            out[N] = me.c @ Y - me.c0
+            if not np.all(np.isfinite(out)):
+                out[:] = np.inf
+
+        def jacobian(snes, X, A, P):
+            Y = X.getArray(readonly=True)
+            a = float(np.exp(Y[N]))
+            y = Y[:N] * me.s
+            r0, _, Jd = me.prob.residual(y, a, want_jac=True)
+            Jf = np.empty((n, n))
+            Jf[:N, :N] = (Jd * me.rs[:, None]) * me.s[None, :]
+            h = 1e-6  # d r / d ln a: one more residual (the contact term alone depends on a)
+            r1, _ = me.prob.residual(y, a * np.exp(h))
+            Jf[:N, N] = (r1 - r0) / h * me.rs
+            Jf[N] = me.c
+            A.setValues(range(n), range(n), Jf.ravel())  # row-major
+            A.assemble()
+
+        self.snes.setFunction(function, self.F)
+        self.snes.setJacobian(jacobian, self.J, self.J)
+        ksp = self.snes.getKSP()
+        ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+        reasons = PETSc.SNES.ConvergedReason
+        hist: list[float] = []
+        self.ok = False
+
+        def converged(snes, it, norms):
+            F = snes.getFunction()[0].getArray(readonly=True)
+            X = snes.getSolution().getArray(readonly=True)
+            if not np.all(np.isfinite(F)):
+                return reasons.DIVERGED_FNORM_NAN
+            rn = float(np.abs(F[:N]).max())
+            scale = max(float(np.abs(X[: prob.N]).max()), 1.0)
+            if it == 0:
+                hist.clear()
+            hist.append(rn)
+            c_ok = abs(F[N]) <= 1e-9
+            if rn <= tol * scale and c_ok:
+                me.ok = True
+                return reasons.CONVERGED_FNORM_ABS
+            if len(hist) > 4 and hist[-1] > 0.5 * hist[-5] and rn <= tol_stall * scale and c_ok:
+                me.ok = True  # Newton stalls on a kink (stick/slip transition)
+                return reasons.CONVERGED_SNORM_RELATIVE
+            if it >= max_it:
+                return reasons.DIVERGED_MAX_IT
+            return reasons.ITERATING
+
+        self.snes.setConvergenceTest(converged)
+        self.snes.setTolerances(max_it=max_it + 1)
+        self.snes.setMaxLinearSolveFailures(10**6)
+        self.snes.setFromOptions()
+        del po[f"{prefix}snes_linesearch_type"]
+
+    def scaled(self, y: np.ndarray, s: float) -> np.ndarray:
+        return np.concatenate([y / self.s, [s]])
+
+    def unscaled(self, Y: np.ndarray) -> tuple[np.ndarray, float]:
+        return Y[:-1] * self.s, float(Y[-1])
+
+    def solve(self, Y0: np.ndarray, c: np.ndarray | None = None,
+              Yp: np.ndarray | None = None) -> tuple[np.ndarray, bool, int]:
+        """From ``Y0`` with the constraint ``c . (Y - Yp) = 0`` (default: ``s = Y0[-1]``)."""
+        if c is None:
+            self.c = np.zeros(self.n)
+            self.c[-1] = 1.0
+            self.c0 = float(Y0[-1])
+        else:
+            self.c = np.asarray(c, float)
+            self.c0 = float(self.c @ (Y0 if Yp is None else Yp))
+        self.X.getArray()[:] = Y0
+        self.ok = False
+        try:
+            self.snes.solve(None, self.X)
+        except Exception as e:  # noqa: BLE001 - a PETSc/numerical failure is a failed step
+            log.debug("EPMC corrector: %s", e)
+            return Y0, False, 0
+        Y = self.X.getArray(readonly=True).copy()
+        ok = bool(self.snes.getConvergedReason() > 0 and self.ok and np.all(np.isfinite(Y)))
+        return Y, ok, int(self.snes.getIterationNumber())
+
+    def destroy(self) -> None:
+        for o in (self.snes, self.F, self.X, self.J):
+            o.destroy()
+
+
+# -- choosing the mode and the amplitude range -------------------------------------------
+def linear_modes(system: System) -> tuple[np.ndarray, np.ndarray]:
+    """(w (rad/s), Phi mass-normalised) of the linear system with every contact stuck."""
+    lam, phi = sla.eigh(system.regularised_stiffness(), system.M)
+    return np.sqrt(np.clip(lam, 0.0, None)), phi
+
+
+def pick_mode(system: System, f1: object, band_hz: tuple[float, float] | None = None) -> int:
+    """The stuck mode the excitation ``f1`` drives most (in ``band_hz`` if given).
+
+    Score ``|phi_j^H f1| / w_j^2``: the static modal response to the force.
+    """
+    w, phi = linear_modes(system)
+    a = np.asarray(f1, dtype=complex).ravel()
+    if a.shape != (system.n,):
+        raise InputError("f1", f"shape {a.shape}", f"{system.n} complex amplitudes (N)")
+    score = np.abs(phi.T @ a) / np.maximum(w, 1e-300) ** 2
+    if band_hz is not None:
+        f = w / TWO_PI
+        inside = (f >= band_hz[0]) & (f <= band_hz[1])
+        if inside.any():
+            score = np.where(inside, score, -1.0)
+    return int(np.argmax(score))
+
+
+def slip_amplitude(system: System, mode: int) -> float:
+    """Modal amplitude (sqrt(kg) m) at which the first element slips or lifts in the stuck mode."""
+    if system.contacts is None or not system.n_el:
+        return 1.0
+    _, phi = linear_modes(system)
+    el = system.contacts
+    u = np.asarray(el.W @ phi[:, mode]).reshape(el.n_el, 3)
+    cand = []
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = el.mu * el.n0 / (el.kt1 * np.abs(u[:, 0]))
+        t2 = el.mu * el.n0 / (el.kt2 * np.abs(u[:, 1]))
+        nn = el.n0 / (el.kn * np.abs(u[:, 2]))
+    for v in (t1, t2, nn):
+        v = v[np.isfinite(v) & (v > 0)]
+        if v.size:
+            cand.append(float(v.min()))
+    return min(cand) if cand else 1.0
+
+
+# -- the continuation ---------------------------------------------------------------------
+def nonlinear_mode(
+    system: System,
+    mode: int | None = None,
+    amplitude_range: tuple[float, float] | None = None,
+    relative_range: tuple[float, float] = (0.05, 300.0),
+    harmonics: tuple[int, ...] = (0, 1, 2, 3),
+    nt: int | None = None,
+    outputs: object = None,
+    output_names: tuple[str, ...] | None = None,
+    f1: object = None,
+    band_hz: tuple[float, float] | None = None,
+    n_steps: int = 40,
+    max_points: int = 400,
+    tol: float = 1e-10,
+    tol_stall: float = 1e-7,
+    max_newton: int = 25,
+    max_change: float = 0.1,
+    dc_anchor: float = 1e-3,
+    label: str = "",
+) -> NlModeBranch:
+    """The backbone of one nonlinear mode, continued in modal amplitude.
+
+    ``mode``: index of the stuck linear mode to follow (default: the one
+    ``f1`` drives most in ``band_hz``, see :func:`pick_mode`, else mode 0).
+    ``amplitude_range`` (sqrt(kg) m), or ``relative_range`` times the modal
+    amplitude of the first slip (or lift-off) in the stuck mode. ``n_steps``
+    sets the first step (``ln(a1/a0) / n_steps``). Pseudo-arc-length
+    continuation in ``(psi, w, xi, ln a)`` (a fold of the backbone in
+    amplitude passes); the step adapts to the Newton iterations and to
+    ``max_change`` (largest relative change of frequency or damping ratio
+    per step). Never raises for a failed solve:
+    the branch says ``failed`` and keeps its points.
+    """
+    t_start = time.perf_counter()
+    fourier = Fourier(tuple(harmonics), nt or 0)
+    if mode is None:
+        mode = pick_mode(system, f1, band_hz) if f1 is not None else 0
+    O = observation(system, outputs)
+    names = tuple(output_names) if output_names else tuple(f"y{j}" for j in range(O.shape[0]))
+    if len(names) != O.shape[0]:
+        raise InputError("output_names", list(names), f"{O.shape[0]} names (one per output)")
+    prob = Epmc(system, fourier, mode, O, dc_anchor)
+    if amplitude_range is None:
+        a_slip = slip_amplitude(system, mode)
+        lo, hi = (float(v) for v in relative_range)
+        check_range("relative_range[0]", lo, 0.0, lo_open=True)
+        check_range("relative_range[1]", hi, lo, lo_open=True)
+        amplitude_range = (lo * a_slip, hi * a_slip)
+    a0, a1 = (float(v) for v in amplitude_range)
+    check_range("amplitude_range[0]", a0, 0.0, lo_open=True)
+    check_range("amplitude_range[1]", a1, a0, lo_open=True)
+    n_steps = check_int("n_steps", n_steps, 1)
+    rows: dict[str, list] = {k: [] for k in _ARRAYS}
+    snes = _Snes(prob, tol, tol_stall, max_newton)
+    message, failed, completed = "", False, False
+    s0, s1 = np.log(a0), np.log(a1)
+    phi1_ref = None
+
+    def record(y: np.ndarray, a: float, its: int) -> dict[str, Any]:
+        nonlocal phi1_ref
+        pt = prob.point(y, a, phi1_ref)
+        if phi1_ref is None:
+            phi1_ref = pt["phi1"]
+        if pt["lost"]:
+            raise _Stop(f"the damper has lost contact at modal amplitude {a:.4g}: a singular "
+                        "state; the backbone ends here")
+        for k in _ARRAYS:
+            if k != "newton_its":
+                rows[k].append(pt[k])
+        rows["newton_its"].append(its)
+        return pt
+
+    from ..log import progress_bar
+
+    N = prob.N
+    span = s1 - s0
+    # metric of the arc length: the shape relative to its size, frequency and xi relative to
+    # the linear frequency (a change of a third counts as the whole amplitude range), ln a
+    # relative to the range
+    mw = np.empty(N + 3)
+    mw[:N] = 1.0 / max(float(np.linalg.norm(prob.linear_guess()[:N])), 1e-300)
+    if fourier.has_dc:  # the mean position does not count (as dc_weight = 0 in the FRF): a
+        mw[: prob.n] = 0.0  # stuck slider's offset jumps where slip starts
+    mw[N] = mw[N + 1] = 3.0
+    mw[N + 2] = 1.0 / span
+    ds = 1.0 / n_steps
+    ds_max, ds_min = 4.0 / n_steps, 1e-5
+    cos_max = np.cos(np.radians(30.0))
+
+    def norm(v: np.ndarray) -> float:
+        return float(np.sqrt(np.sum((mw * v) ** 2)))
+
+    def w_d(Y: np.ndarray) -> tuple[float, float]:
+        y, _ = snes.unscaled(Y)
+        return y[N], y[N + 1] / (2 * y[N])
+
+    try:
+        with progress_bar(f"nlmode {label or mode}", total=round(span, 6), unit="ln a") as bar:
+            Y, ok, its = snes.solve(snes.scaled(prob.linear_guess(), s0))
+            if not ok:
+                raise _Stop(f"the corrector failed at the first amplitude {a0:.4g}", True)
+            prev = record(snes.unscaled(Y)[0], a0, its)
+            Y_prev: np.ndarray | None = None
+            turns = 0
+            while True:
+                if len(rows["amplitude"]) >= max_points:
+                    raise _Stop(f"stopped after max_points = {max_points}", False)
+                if Y_prev is None:
+                    t = np.zeros(N + 3)
+                    t[-1] = span  # along ln a: the linear mode does not change
+                else:
+                    t = (Y - Y_prev) / norm(Y - Y_prev)
+                Yp = Y + ds * t
+                Yn, ok, its = snes.solve(Yp, mw**2 * t, Yp)
+                if ok:
+                    (w0, d0), (w1, d1) = w_d(Y), w_d(Yn)
+                    change = max(abs(w1 - w0) / w0, abs(d1 - d0) / max(abs(d0), 0.01))
+                    step = Yn - Y
+                    cosang = float(np.sum(mw**2 * step * t)) / max(norm(step), 1e-300)
+                    if (change > max_change or cosang < cos_max) and ds > 2 * ds_min \
+                            and turns < 4:
+                        ok = False
+                        turns += 1
+                if not ok:
+                    ds *= 0.5
+                    if ds < ds_min:
+                        raise _Stop(
+                            f"the corrector failed after modal amplitude "
+                            f"{np.exp(Y[-1]):.4g} even with the smallest step; the backbone "
+                            "so far is kept", True)
+                    continue
+                turns = 0
+                if Yn[-1] >= s1:  # the last point exactly at the largest amplitude
+                    th = (s1 - Y[-1]) / (Yn[-1] - Y[-1])
+                    Yg = Y + th * (Yn - Y)
+                    Yg[-1] = s1
+                    Ye, ok_e, its_e = snes.solve(Yg)
+                    if ok_e:
+                        record(snes.unscaled(Ye)[0], a1, its_e)
+                    break
+                if Yn[-1] < s0:
+                    raise _Stop("the backbone turned back below the smallest amplitude", False)
+                Y_prev, Y = Y, Yn
+                prev = record(snes.unscaled(Y)[0], float(np.exp(Y[-1])), its)
+                bar.n = round(min(max(Y[-1] - s0, 0.0), span), 6)
+                bar.set_postfix_str(f"{prev['freq_hz']:.4g} Hz, D {prev['damping_ratio']:.3g}",
+                                    refresh=False)
+                bar.update(0)
+                grow = 1.5 if its <= 4 else (0.7 if its > 8 else 1.0)
+                ds = float(np.clip(ds * grow, ds_min, ds_max))
+            completed = True
+    except _Stop as stop:
+        message, failed = str(stop), stop.failed
+        (log.warning if failed else log.info)("%s", message)
+    except (np.linalg.LinAlgError, FloatingPointError, ArithmeticError, RuntimeError) as e:
+        failed = True
+        message = f"stopped by a numerical error: {type(e).__name__}: {e}"
+        log.warning("%s", message)
+    finally:
+        snes.destroy()
+    n_el = system.n_el
+    arr: dict[str, np.ndarray] = {}
+    shapes = dict(friction_energy=(0, n_el), status=(0, n_el), out_amp=(0, O.shape[0]),
+                  out_h1=(0, O.shape[0]), psi=(0, prob.N))
+    for k, v in rows.items():
+        arr[k] = np.array(v) if v else np.zeros(shapes.get(k, (0,)))
+    arr["status"] = arr["status"].astype(np.int8)
+    arr["newton_its"] = arr["newton_its"].astype(int)
+    timings = dict(total=time.perf_counter() - t_start, aft=prob.stats["t_aft"])
+    return NlModeBranch(
+        mode=mode, f_stuck_hz=prob.w_lin / TWO_PI, linear_hz=prob.wn / TWO_PI,
+        harmonics=fourier.harmonics, nt=fourier.nt, n=system.n, output_names=names,
+        completed=completed, failed=failed,
+        message=message or ("reached the largest amplitude" if completed else ""),
+        timings=timings, label=label, **arr)
+
+
+class _Stop(Exception):
+    def __init__(self, message: str, failed: bool):
+        super().__init__(message)
+        self.failed = failed
