@@ -335,6 +335,34 @@ class Epmc:
         self.stats["t_aft"] += time.perf_counter() - t0
         return G.reshape(f.nh, self.n3), D, res
 
+    def contact_local(self, U: np.ndarray, want_jac: bool = True):
+        """Like :meth:`contact` from the contact displacement harmonics U (nh, n3) directly."""
+        f = self.fourier
+        t0 = time.perf_counter()
+        Uloc = U.reshape(f.nh, self.n_el, 3)
+        res = aft(Uloc, self.el, f, want_jac=want_jac)
+        G = res.F - self.kc[None] * Uloc
+        if f.has_dc and self.anchor.any():
+            G[0] += self.anchor * Uloc[0]
+        D = None
+        if want_jac:
+            D = self._jac_sparse(res.J)
+        self.stats["t_aft"] += time.perf_counter() - t0
+        return G.reshape(f.nh, self.n3), D, res
+
+    def _jac_sparse(self, J0: np.ndarray) -> sp.csr_matrix:
+        """dG/dU as a sparse (nh n3, nh n3) matrix from the AFT's per-element blocks."""
+        f = self.fourier
+        J = J0.copy()
+        hh = np.arange(f.nh)
+        for a in range(3):
+            J[:, a, hh, a, hh] -= self.kc[:, a][:, None]
+        if f.has_dc:
+            for a in range(2):
+                J[:, a, 0, a, 0] += self.anchor[:, a]
+        return sp.csr_matrix((J.ravel(), (self._drow, self._dcol)),
+                             shape=(f.nh * self.n3, f.nh * self.n3))
+
     def _linear(self, P: np.ndarray, w: float, xi: float) -> np.ndarray:
         """The linear part on harmonics P (nh, n): K_r P0; A Pc + B Ps; A Ps - B Pc."""
         f = self.fourier
@@ -402,6 +430,32 @@ class Epmc:
         J[N, (c + 1) * n:(c + 2) * n] = 2 * (self.M @ psi[c + 1])
         J[N + 1, (c + 1) * n:(c + 2) * n] = self.Mphi
         return r, res, J
+
+    # hooks shared with the condensed form (the corrector and the loop see only these)
+    @property
+    def n_unknowns(self) -> int:
+        return self.N + 2
+
+    def var_scale(self) -> np.ndarray:
+        """Scale of each unknown (psi as it is; w and xi by the linear frequency)."""
+        sc = np.ones(self.N + 2)
+        sc[self.N:] = self.w_lin
+        return sc
+
+    def row_scale(self) -> np.ndarray:
+        rs = np.ones(self.N + 2)
+        rs[: self.N] = 1.0 / (self.w_lin**2 * max(np.abs(np.diag(self.M)).max(), 1e-300))
+        return rs
+
+    def dc_mask(self) -> np.ndarray:
+        m = np.zeros(self.N + 2, bool)
+        if self.fourier.has_dc:
+            m[: self.n] = True
+        return m
+
+    def physical(self, y: np.ndarray, a: float) -> tuple[np.ndarray, float]:
+        """``([psi, w, xi], a)`` in the mass normalisation (here the unknowns themselves)."""
+        return y, a
 
     def linear_guess(self) -> np.ndarray:
         """``y`` of the linear mode with every contact stuck (exact as ``a -> 0``)."""
@@ -477,6 +531,227 @@ class Epmc:
         )
 
 
+class EpmcCondensed:
+    """The same problem on the contact displacements and the followed mode (modal damping).
+
+    With the mass-normalised modes ``Phi`` of ``(K_r, M)`` diagonalising
+    ``C`` (modal damping), the coordinates are split into the followed mode
+    ``j`` (modal coordinate ``eta``, every harmonic) and the receptance of
+    all the others, ``H'_k = sum_{i != j} phi_i phi_i^T / (w_i^2 - (k w)^2 +
+    i k w (c_i - xi))``, which stays regular on the backbone (the followed
+    mode alone is singular at its linear limit). Unknowns per unit ``a``:
+    the active contact displacements ``X`` (nh, n_s), ``eta`` except its
+    harmonic-1 parts (``eta_c1 = 1``, ``eta_s1 = 0``: amplitude and phase),
+    ``w`` and ``xi``; residuals ``X - W (phi_j eta + H' (P - W^T G)) / a``
+    and the followed mode's own equation. ``a`` here is the amplitude of the
+    linear mode's coordinate; :meth:`physical` converts a solution to the
+    mass normalisation of :class:`Epmc` (``psi_1^H M psi_1 = 1``), so both
+    give the same backbone. The Jacobian costs a few products with the
+    contact Jacobian (sparse per element) instead of a dense system on every
+    DOF: the size is ``nh (n_s + 1)`` instead of ``nh n``.
+    """
+
+    def __init__(self, system: System, fourier: Fourier, mode: int, outputs: object = None,
+                 dc_anchor: float = 1e-3):
+        self.phys = Epmc(system, fourier, mode, outputs, dc_anchor)
+        ph = self.phys
+        self.system, self.fourier = system, fourier
+        self.mode, self.w_lin, self.xi_lin, self.wn = ph.mode, ph.w_lin, ph.xi_lin, ph.wn
+        self.stats = ph.stats
+        lam, Phi = sla.eigh(ph.Kr, ph.M)
+        self.Phi = Phi
+        Cm = Phi.T @ ph.C @ Phi
+        self.cm = np.diag(Cm).copy()  # 2 zeta_i w_i
+        self.el = system.contacts
+        self.n_el = ph.n_el
+        self.act = np.flatnonzero(self.el.active.ravel())
+        self.n_s = self.act.size
+        B = np.asarray(self.el.W @ Phi)  # (n3, n_m)
+        self.Bs = B[self.act]
+        self.bj = self.Bs[:, mode].copy()
+        self.nh = fourier.nh
+        self.Ns = self.nh * self.n_s
+        c1 = fourier.index(1, "c")
+        self.c1 = c1
+        self.keep_eta = np.array([h for h in range(self.nh) if h not in (c1, c1 + 1)], int)
+        self.N = self.Ns + self.keep_eta.size  # unknowns besides w and xi
+        self.pm = np.zeros((self.nh, Phi.shape[1]))  # modal static force (per unit a: / a)
+        if fourier.has_dc:
+            f0 = system.total_static_force()
+            self.pm[0] = Phi.T @ f0
+        # the contact Jacobian pattern restricted to the active rows
+        pos = -np.ones(3 * self.n_el, int)
+        pos[self.act] = np.arange(self.n_s)
+        self._pos = pos
+        self.mask_other = np.ones(Phi.shape[1])
+        self.mask_other[mode] = 0.0
+
+    # hooks ----------------------------------------------------------------------------
+    @property
+    def n_unknowns(self) -> int:
+        return self.N + 2
+
+    def var_scale(self) -> np.ndarray:
+        sc = np.ones(self.N + 2)
+        sc[self.N:] = self.w_lin
+        return sc
+
+    def row_scale(self) -> np.ndarray:
+        return np.ones(self.N + 2)
+
+    def dc_mask(self) -> np.ndarray:
+        m = np.zeros(self.N + 2, bool)
+        if self.fourier.has_dc:
+            m[: self.n_s] = True
+            m[self.Ns + int(np.flatnonzero(self.keep_eta == 0)[0])] = True
+        return m
+
+    def _split(self, y: np.ndarray):
+        X = y[: self.Ns].reshape(self.nh, self.n_s)
+        eta = np.zeros(self.nh)
+        eta[self.keep_eta] = y[self.Ns: self.N]
+        eta[self.c1] = 1.0
+        return X, eta, float(y[self.N]), float(y[self.N + 1])
+
+    def linear_guess(self) -> np.ndarray:
+        y = np.zeros(self.N + 2)
+        X = np.zeros((self.nh, self.n_s))
+        X[self.c1] = self.bj
+        y[: self.Ns] = X.ravel()
+        y[self.N] = self.w_lin
+        y[self.N + 1] = self.xi_lin
+        return y
+
+    def _coef(self, w: float, xi: float):
+        """Per harmonic component row: the modal receptances d (nh_k, n_m) complex, and
+        their derivatives in w and xi (mode j excluded)."""
+        f = self.fourier
+        k = np.asarray(f.harmonics, float)[:, None]
+        wn2 = self.wn[None, :] ** 2
+        den = wn2 - (k * w) ** 2 + 1j * k * w * (self.cm[None, :] - xi)
+        den[:, self.mode] = 1.0  # the followed mode is not in H' (and is singular there)
+        d = self.mask_other / den
+        dd_w = -(-2 * k * k * w + 1j * k * (self.cm[None, :] - xi)) * d / den
+        dd_xi = -(-1j * k * w) * d / den
+        return d, dd_w, dd_xi
+
+    def _apply(self, coef: np.ndarray, F: np.ndarray) -> np.ndarray:
+        """Multiply each complex harmonic of F (nh, m) by coef rows (one per harmonic)."""
+        from .linear import _combine
+
+        return _combine(self.fourier, F, coef)
+
+    def _contact(self, X: np.ndarray, a: float, want_jac: bool):
+        U = np.zeros((self.nh, 3 * self.n_el))
+        U[:, self.act] = X * a
+        G, D, res = self.phys.contact_local(U, want_jac)
+        return G[:, self.act] / a, D, res
+
+    def residual(self, y: np.ndarray, a: float, want_jac: bool = False):
+        f = self.fourier
+        X, eta, w, xi = self._split(y)
+        Ga, D, res = self._contact(X, a, want_jac)  # (nh, n_s) per unit a
+        Fm = self.pm / a - Ga @ self.Bs  # (nh, n_m) modal force per unit a
+        d, dd_w, dd_xi = self._coef(w, xi)
+        z = self._apply(d, Fm)  # other modes
+        ru = X - (z @ self.Bs.T + eta[:, None] * self.bj[None, :])
+        # the followed mode's equation, divided by w_j^2
+        j = self.mode
+        cj = self.cm[j]
+        w2 = self.w_lin**2
+        re = np.empty(self.nh)
+        if f.has_dc:
+            re[0] = (w2 * eta[0] - Fm[0, j]) / w2
+        for k, c, s_ in f.pairs():
+            A = w2 - (k * w) ** 2
+            Bk = k * w * (cj - xi)
+            re[c] = (A * eta[c] + Bk * eta[s_] - Fm[c, j]) / w2
+            re[s_] = (A * eta[s_] - Bk * eta[c] - Fm[s_, j]) / w2
+        r = np.concatenate([ru.ravel(), re])
+        self.stats["n_residual"] += 1
+        if not want_jac:
+            return r, res
+        self.stats["n_jacobian"] += 1
+        nh, n_s, Ns, N = self.nh, self.n_s, self.Ns, self.N
+        J = np.zeros((N + 2, N + 2))
+        # dr_u/dX = I + R D,  R = blocks of Bs H'_k Bs^T (real form)
+        Dact = self._dact(D)  # sparse (Ns, Ns): dG_act / dX (per unit a: the same)
+        R = np.zeros((Ns, Ns))
+        for i, kk in enumerate(f.harmonics):
+            Rk = (self.Bs * d[i]) @ self.Bs.T
+            if kk == 0:
+                R[:n_s, :n_s] = Rk.real
+            else:
+                c = f.index(kk, "c")
+                rc, rs = slice(c * n_s, (c + 1) * n_s), slice((c + 1) * n_s, (c + 2) * n_s)
+                R[rc, rc] = Rk.real
+                R[rc, rs] = Rk.imag
+                R[rs, rc] = -Rk.imag
+                R[rs, rs] = Rk.real
+        J[:Ns, :Ns] = np.asarray((Dact.T @ R.T).T)
+        J[np.arange(Ns), np.arange(Ns)] += 1.0
+        # dr_u/deta = -b_j in each component
+        for q, h in enumerate(self.keep_eta):
+            J[h * n_s:(h + 1) * n_s, Ns + q] = -self.bj
+        # d/dw, d/dxi of r_u through H'
+        J[:Ns, N] = -(self._apply(dd_w, Fm) @ self.Bs.T).ravel()
+        J[:Ns, N + 1] = -(self._apply(dd_xi, Fm) @ self.Bs.T).ravel()
+        # the followed mode's rows: -dFm_j/dX = b_j^T dG/dX
+        bD = np.asarray((Dact.T @ np.kron(np.eye(nh), self.bj[None, :]).T).T)  # (nh, Ns)
+        Je = np.zeros((nh, N + 2))
+        Je[:, :Ns] = bD
+        Ee = np.zeros((nh, nh))  # d re / d eta
+        dw = np.zeros(nh)
+        dxi = np.zeros(nh)
+        if f.has_dc:
+            Ee[0, 0] = w2
+        for k, c, s_ in f.pairs():
+            A = w2 - (k * w) ** 2
+            Bk = k * w * (cj - xi)
+            Ee[c, c], Ee[c, s_] = A, Bk
+            Ee[s_, c], Ee[s_, s_] = -Bk, A
+            dA, dB = -2 * k * k * w, k * (cj - xi)
+            dw[c] = dA * eta[c] + dB * eta[s_]
+            dw[s_] = dA * eta[s_] - dB * eta[c]
+            dxi[c] = -k * w * eta[s_]
+            dxi[s_] = k * w * eta[c]
+        Je[:, Ns:N] = Ee[:, self.keep_eta]
+        Je[:, N] = dw
+        Je[:, N + 1] = dxi
+        J[Ns:N + 2] = Je / w2
+        return r, res, J
+
+    def _dact(self, D) -> sp.csr_matrix:
+        """The contact Jacobian on the active unknowns (Ns, Ns), from the full sparse one."""
+        if D is None:
+            return sp.csr_matrix((self.Ns, self.Ns))
+        n3 = 3 * self.n_el
+        idx = (np.arange(self.nh)[:, None] * n3 + self.act[None, :]).ravel()
+        return D[idx][:, idx].tocsr()
+
+    def full_modal(self, y: np.ndarray, a: float) -> np.ndarray:
+        """Modal coordinates (nh, n_m) per unit ``a`` of a solution (all modes)."""
+        X, eta, w, xi = self._split(y)
+        Ga, _, _ = self._contact(X, a, False)
+        Fm = self.pm / a - Ga @ self.Bs
+        d, _, _ = self._coef(w, xi)
+        z = self._apply(d, Fm)
+        z[:, self.mode] = eta
+        return z
+
+    def physical(self, y: np.ndarray, a: float) -> tuple[np.ndarray, float]:
+        """The solution as ``([psi, w, xi], a_M)`` with ``psi_1^H M psi_1 = 1``."""
+        z = self.full_modal(y, a)
+        c = self.c1
+        m_eff = float(np.sum(z[c] ** 2 + z[c + 1] ** 2))
+        s = np.sqrt(m_eff)
+        psi = (z @ self.Phi.T) / s
+        return np.concatenate([psi.ravel(), [y[self.N], y[self.N + 1]]]), a * s
+
+    def point(self, y: np.ndarray, a: float, phi1_ref):
+        return self.phys.point(y, a, phi1_ref)
+
+
 # -- the corrector: PETSc SNES with the dense analytic Jacobian ------------------------
 class _Snes:
     """Newton (SNES, backtracking line search, dense LU) on the bordered system.
@@ -492,7 +767,7 @@ class _Snes:
         from petsc4py import PETSc
 
         self.prob = prob
-        N = prob.N + 2
+        N = prob.n_unknowns
         n = N + 1
         self.n = n
         comm = PETSc.COMM_SELF
@@ -505,12 +780,8 @@ class _Snes:
         self.X = PETSc.Vec().createSeq(n, comm=comm)
         self.J = PETSc.Mat().createDense((n, n), comm=comm)
         self.J.setUp()
-        # scaling: psi as it is, w and xi by the linear frequency; rows by w^2 max(M)
-        self.s = np.ones(N)
-        self.s[prob.N] = prob.w_lin
-        self.s[prob.N + 1] = prob.w_lin
-        self.rs = np.ones(N)
-        self.rs[: prob.N] = 1.0 / (prob.w_lin**2 * max(np.abs(np.diag(prob.M)).max(), 1e-300))
+        self.s = prob.var_scale()
+        self.rs = prob.row_scale()
         self.c = np.zeros(n)
         self.c[-1] = 1.0
         self.c0 = 0.0
@@ -554,7 +825,7 @@ class _Snes:
             if not np.all(np.isfinite(F)):
                 return reasons.DIVERGED_FNORM_NAN
             rn = float(np.abs(F[:N]).max())
-            scale = max(float(np.abs(X[: prob.N]).max()), 1.0)
+            scale = max(float(np.abs(X[: N - 2]).max()), 1.0)
             if it == 0:
                 hist.clear()
             hist.append(rn)
@@ -605,6 +876,28 @@ class _Snes:
     def destroy(self) -> None:
         for o in (self.snes, self.F, self.X, self.J):
             o.destroy()
+
+
+def make_problem(system: System, fourier: Fourier, mode: int, outputs: object = None,
+                 dc_anchor: float = 1e-3, space: str = "auto"):
+    """:class:`EpmcCondensed` when the damping is modal and the contacts see fewer
+    coordinates than the model has ("auto"), else :class:`Epmc` (all DOFs)."""
+    from ..errors import check_choice
+
+    check_choice("space", space, ("auto", "condensed", "physical"))
+    if space == "physical" or not system.n_el:
+        return Epmc(system, fourier, mode, outputs, dc_anchor)
+    n_s = int(system.contacts.active.sum())
+    modal = system.C is None
+    if not modal:
+        from .linear import ModalLinear
+
+        _, modal = ModalLinear.is_modal(system.M, system.regularised_stiffness(), system.C)
+    if space == "condensed" or (modal and n_s + 1 < system.n):
+        if not modal:
+            raise InputError("space", space, "physical (the damping is not modal)")
+        return EpmcCondensed(system, fourier, mode, outputs, dc_anchor)
+    return Epmc(system, fourier, mode, outputs, dc_anchor)
 
 
 # -- choosing the mode and the amplitude range -------------------------------------------
@@ -670,6 +963,7 @@ def nonlinear_mode(
     max_newton: int = 25,
     max_change: float = 0.1,
     dc_anchor: float = 1e-3,
+    space: str = "auto",
     label: str = "",
 ) -> NlModeBranch:
     """The backbone of one nonlinear mode, continued in modal amplitude.
@@ -678,11 +972,12 @@ def nonlinear_mode(
     ``f1`` drives most in ``band_hz``, see :func:`pick_mode`, else mode 0).
     ``amplitude_range`` (sqrt(kg) m), or ``relative_range`` times the modal
     amplitude of the first slip (or lift-off) in the stuck mode. ``n_steps``
-    sets the first step (``ln(a1/a0) / n_steps``). Pseudo-arc-length
-    continuation in ``(psi, w, xi, ln a)`` (a fold of the backbone in
-    amplitude passes); the step adapts to the Newton iterations and to
-    ``max_change`` (largest relative change of frequency or damping ratio
-    per step). Never raises for a failed solve:
+    sets the first step (``ln(a1/a0) / n_steps``). Steps in ``ln a`` with a
+    secant predictor; where they stall (a fold of the backbone in amplitude),
+    pseudo-arc-length steps in ``(psi, w, xi, ln a)`` pass it (a step that
+    lands back on a point already computed is refused); the step adapts to
+    the Newton iterations and to ``max_change`` (largest relative change of
+    frequency or damping ratio per step). Never raises for a failed solve:
     the branch says ``failed`` and keeps its points.
     """
     t_start = time.perf_counter()
@@ -693,7 +988,7 @@ def nonlinear_mode(
     names = tuple(output_names) if output_names else tuple(f"y{j}" for j in range(O.shape[0]))
     if len(names) != O.shape[0]:
         raise InputError("output_names", list(names), f"{O.shape[0]} names (one per output)")
-    prob = Epmc(system, fourier, mode, O, dc_anchor)
+    prob = make_problem(system, fourier, mode, O, dc_anchor, space)
     if amplitude_range is None:
         a_slip = slip_amplitude(system, mode)
         lo, hi = (float(v) for v in relative_range)
@@ -712,12 +1007,13 @@ def nonlinear_mode(
 
     def record(y: np.ndarray, a: float, its: int) -> dict[str, Any]:
         nonlocal phi1_ref
+        y, a = prob.physical(y, a)
         pt = prob.point(y, a, phi1_ref)
         if phi1_ref is None:
             phi1_ref = pt["phi1"]
         if pt["lost"]:
             raise _Stop(f"the damper has lost contact at modal amplitude {a:.4g}: a singular "
-                        "state; the backbone ends here")
+                        "state; the backbone ends here", False)
         for k in _ARRAYS:
             if k != "newton_its":
                 rows[k].append(pt[k])
@@ -726,15 +1022,16 @@ def nonlinear_mode(
 
     from ..log import progress_bar
 
-    N = prob.N
+    N = prob.n_unknowns - 2
     span = s1 - s0
     # metric of the arc length: the shape relative to its size, frequency and xi relative to
     # the linear frequency (a change of a third counts as the whole amplitude range), ln a
     # relative to the range
     mw = np.empty(N + 3)
     mw[:N] = 1.0 / max(float(np.linalg.norm(prob.linear_guess()[:N])), 1e-300)
-    if fourier.has_dc:  # the mean position does not count (as dc_weight = 0 in the FRF): a
-        mw[: prob.n] = 0.0  # stuck slider's offset jumps where slip starts
+    # the mean position does not count (as dc_weight = 0 in the FRF): a stuck slider's
+    # offset jumps where slip starts
+    mw[:N][prob.dc_mask()[:N]] = 0.0
     mw[N] = mw[N + 1] = 3.0
     mw[N + 2] = 1.0 / span
     ds = 1.0 / n_steps
@@ -756,6 +1053,9 @@ def nonlinear_mode(
             prev = record(snes.unscaled(Y)[0], a0, its)
             Y_prev: np.ndarray | None = None
             turns = 0
+            arc = 0  # > 0: steps left in pseudo-arc-length mode (a fold in amplitude)
+            hist = [Y]
+            s_top = float(Y[-1])
             while True:
                 if len(rows["amplitude"]) >= max_points:
                     raise _Stop(f"stopped after max_points = {max_points}", False)
@@ -764,19 +1064,32 @@ def nonlinear_mode(
                     t[-1] = span  # along ln a: the linear mode does not change
                 else:
                     t = (Y - Y_prev) / norm(Y - Y_prev)
-                Yp = Y + ds * t
-                Yn, ok, its = snes.solve(Yp, mw**2 * t, Yp)
+                if arc:  # the plane normal to the secant, a predictor along it
+                    Yp = Y + ds * t
+                    Yn, ok, its = snes.solve(Yp, mw**2 * t, Yp)
+                else:  # the next amplitude, the secant extrapolated to it as predictor
+                    dsn = ds * span
+                    Yp = Y + t * (dsn / t[-1]) if t[-1] > 1e-12 * span else Y.copy()
+                    Yp[-1] = Y[-1] + dsn
+                    Yn, ok, its = snes.solve(Yp)
                 if ok:
                     (w0, d0), (w1, d1) = w_d(Y), w_d(Yn)
-                    change = max(abs(w1 - w0) / w0, abs(d1 - d0) / max(abs(d0), 0.01))
+                    change = max(abs(w1 - w0) / w0, abs(d1 - d0) / max(abs(d0), 0.05))
                     step = Yn - Y
                     cosang = float(np.sum(mw**2 * step * t)) / max(norm(step), 1e-300)
                     if (change > max_change or cosang < cos_max) and ds > 2 * ds_min \
                             and turns < 4:
                         ok = False
                         turns += 1
+                    elif cosang < 0.0 and Y_prev is not None:
+                        ok = False  # back along the branch behind us: never accepted
+                    elif len(hist) > 2 and min(norm(Yn - h) for h in hist[:-2]) < 0.3 * ds:
+                        ok = False  # retracing the branch already computed
                 if not ok:
                     ds *= 0.5
+                    if not arc and ds < 1e-3 / n_steps and Y_prev is not None:
+                        arc, ds = 8, 1.0 / n_steps  # natural stepping stalls: a fold?
+                        continue
                     if ds < ds_min:
                         raise _Stop(
                             f"the corrector failed after modal amplitude "
@@ -794,7 +1107,17 @@ def nonlinear_mode(
                     break
                 if Yn[-1] < s0:
                     raise _Stop("the backbone turned back below the smallest amplitude", False)
+                if arc:  # back to stepping in amplitude once it increases again
+                    arc = arc - 1 if Yn[-1] > Y[-1] else 8
+                    if Yn[-1] < s_top - np.log(2.0):
+                        raise _Stop(
+                            f"the backbone folds back in amplitude after {np.exp(s_top):.4g} "
+                            "and does not turn again within a factor 2 (the mode changes "
+                            "character, or the free damper's mean position does): it ends "
+                            "here", False)
+                s_top = max(s_top, float(Yn[-1]))
                 Y_prev, Y = Y, Yn
+                hist.append(Y)
                 prev = record(snes.unscaled(Y)[0], float(np.exp(Y[-1])), its)
                 bar.n = round(min(max(Y[-1] - s0, 0.0), span), 6)
                 bar.set_postfix_str(f"{prev['freq_hz']:.4g} Hz, D {prev['damping_ratio']:.3g}",
@@ -815,7 +1138,7 @@ def nonlinear_mode(
     n_el = system.n_el
     arr: dict[str, np.ndarray] = {}
     shapes = dict(friction_energy=(0, n_el), status=(0, n_el), out_amp=(0, O.shape[0]),
-                  out_h1=(0, O.shape[0]), psi=(0, prob.N))
+                  out_h1=(0, O.shape[0]), psi=(0, fourier.nh * system.n))
     for k, v in rows.items():
         arr[k] = np.array(v) if v else np.zeros(shapes.get(k, (0,)))
     arr["status"] = arr["status"].astype(np.int8)

@@ -109,12 +109,6 @@ def synthesize(
             lo_f[i], hi_f[i] = r[0], r[-1]
         elif r.size == 1:
             hi_f[i] = r[0]
-    left, right = np.isfinite(lo_f), np.isfinite(hi_f)
-    curve_f = np.concatenate([lo_f[left], hi_f[right][::-1]]) / TWO_PI
-    curve_y = np.concatenate([y[left], y[right][::-1]])
-    if band_hz is not None:
-        keep = (curve_f >= band_hz[0]) & (curve_f <= band_hz[1])
-        curve_f, curve_y = curve_f[keep], curve_y[keep]
     # the peak: the first amplitude where the least of |modal dynamic stiffness| a over W
     # reaches the modal force
     W = w.copy()
@@ -145,6 +139,14 @@ def synthesize(
     xi_pk = at(xi)
     f_pk = at(W) / TWO_PI
     y_pk = float(np.exp(at(np.log(np.maximum(y, 1e-300)))))
+    # the curve: both sides of the main branch (the backbone below the peak) and the peak
+    main = np.arange(a.size) < j
+    left, right = main & np.isfinite(lo_f), main & np.isfinite(hi_f)
+    curve_f = np.concatenate([lo_f[left] / TWO_PI, [f_pk], hi_f[right][::-1] / TWO_PI])
+    curve_y = np.concatenate([y[left], [y_pk], y[right][::-1]])
+    if band_hz is not None:
+        keep = (curve_f >= band_hz[0]) & (curve_f <= band_hz[1])
+        curve_f, curve_y = curve_f[keep], curve_y[keep]
     if np.any(np.diff(a[: j + 1]) <= 0):
         reasons.append("the backbone folds back in amplitude below the peak (the mode "
                        "changes character: modal interaction)")
