@@ -297,3 +297,76 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
                "no synthesis is flagged valid."))
     return [sec_bb, sec_syn]
 
+
+
+def fidelity_entry(comp, base, ref, out: str | Path):
+    """The fidelity ladder's "nonlinear-mode synthesis" entry (a ``fidelity.Setting``).
+
+    The base setting's model; one backbone per phase of the conditions
+    (cached like :func:`study_backbones`); each condition's peak amplitude,
+    resonance frequency and friction energy per cycle at the peak from the
+    single-nonlinear-mode synthesis, compared with the reference setting.
+    Time: the base setting's geometry, reduction and assembly, plus the
+    backbones and syntheses (charged as its "hbm" stage). A synthesis that
+    flags itself not valid keeps its errors (the chart shows what it costs
+    to trust it anyway) and says so in ``failed``-free ``members``.
+    """
+    from ..hbm.nlmodes import NlModeBranch
+    from ..hbm.synthesis import synthesize
+    from .fidelity import QUANTITIES, Setting, condition_name
+    from .runner import prepare_model
+
+    out = Path(out)
+    st = Setting("nonlinear-mode synthesis", dict(base.values), "nlmode")
+    st.members.append(("method", "nonlinear-mode synthesis"))
+    st.times = {k: float(v) for k, v in base.times.items()}
+    st.times["hbm"] = 0.0
+    cases = comp.cases(base)
+    ndir = out / "cache" / SUB
+    ndir.mkdir(parents=True, exist_ok=True)
+    by_phase: dict[float, tuple] = {}
+    prep = None
+    invalid: list[str] = []
+    for (p, f), c in zip(comp.conditions, cases, strict=True):
+        if p not in by_phase:
+            key = backbone_key(c, (0.05, 300.0), 40)
+            h5, npz = ndir / f"{key}.h5", ndir / f"{key}.npz"
+            if h5.is_file() and npz.is_file():
+                nm = NlModeBranch.load(h5)
+                with np.load(npz) as z:
+                    f1, band = z["f1"], tuple(float(v) for v in z["band"])
+            else:
+                if prep is None:
+                    prep = prepare_model(c, out)
+                nm, f1, band = family_backbone(prep, c)
+                nm.save(h5)
+                from ..io import atomic_path
+
+                with atomic_path(npz) as tmp, open(tmp, "wb") as fh:
+                    np.savez(fh, f1=f1, band=np.asarray(band, float))
+            st.times["hbm"] += float(nm.timings.get("total", 0.0))
+            by_phase[p] = (nm, f1, band)
+        nm, f1, band = by_phase[p]
+        cond = condition_name(p, f)
+        rr = ref.results.get(cond)
+        sr = rr.summary() if rr is not None and not rr.branch.failed else {}
+        t0 = time.perf_counter()
+        s = synthesize(nm, f1, f, 0, band) if nm.n_points >= 2 else None
+        st.times["hbm"] += time.perf_counter() - t0
+        if s is None:
+            st.errors[cond] = {q: None for q, _, _ in QUANTITIES}
+            continue
+        if not s.valid:
+            invalid.append(f"{cond}: {'; '.join(s.reasons)}")
+        k = int(np.clip(np.searchsorted(nm.amplitude, s.peak_modal_amplitude), 1,
+                        nm.n_points - 1))
+        e_pk = float(np.interp(s.peak_modal_amplitude, nm.amplitude[k - 1:k + 1],
+                               nm.friction_energy[k - 1:k + 1].sum(axis=1))) * 1e3
+        mine = {"peak_amplitude_mm": s.peak_amplitude * 1e3,
+                "peak_frequency_hz": s.peak_freq_hz, "friction_energy_mj": e_pk}
+        st.errors[cond] = {q: (abs(mine[q] - sr[q]) / abs(sr[q]) * 100.0
+                               if sr.get(q) not in (None, 0) else None)
+                           for q, _, _ in QUANTITIES}
+    if invalid:
+        st.members.append(("not valid", "; ".join(invalid)))
+    return st
