@@ -130,10 +130,25 @@ class NlModeBranch:
     message: str = ""
     timings: dict[str, float] = field(default_factory=dict)
     label: str = ""
+    # the linear (stuck) modes, for the other modes' share of a synthesised response
+    lin_phi: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (n, n_m)
+    lin_c: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (n_m,) 2 zeta w, 1/s
+    obs: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (n_out, n)
 
     @property
     def n_points(self) -> int:
         return int(self.amplitude.size)
+
+    def other_modes_response(self, f1: np.ndarray, freq_hz: float) -> np.ndarray:
+        """(n_out,) complex: the stuck linear response of every mode but the followed one to
+        ``f1`` at ``freq_hz`` (what a single-mode synthesis leaves out), m per unit level."""
+        if not self.lin_phi.size:
+            return np.zeros(self.obs.shape[0] if self.obs.size else 1, complex)
+        W = 2 * np.pi * freq_hz
+        wn = 2 * np.pi * self.linear_hz
+        d = 1.0 / (wn**2 - W**2 + 1j * W * self.lin_c)
+        d[self.mode] = 0.0
+        return (self.obs @ self.lin_phi) @ (d * (self.lin_phi.T @ np.asarray(f1, complex)))
 
     @property
     def fourier(self) -> Fourier:
@@ -187,7 +202,8 @@ class NlModeBranch:
         with atomic_path(path) as tmp, h5py.File(tmp, "w") as h:
             for name in _ARRAYS:
                 h.create_dataset(name, data=getattr(self, name))
-            h.create_dataset("linear_hz", data=self.linear_hz)
+            for name in ("linear_hz", "lin_phi", "lin_c", "obs"):
+                h.create_dataset(name, data=getattr(self, name))
             a = h.attrs
             for name in ("mode", "f_stuck_hz", "nt", "n", "completed", "failed", "message",
                          "label"):
@@ -206,7 +222,9 @@ class NlModeBranch:
             a = h.attrs
             return cls(
                 mode=int(a["mode"]), f_stuck_hz=float(a["f_stuck_hz"]),
-                linear_hz=h["linear_hz"][()], harmonics=tuple(int(v) for v in a["harmonics"]),
+                linear_hz=h["linear_hz"][()],
+                **{k: h[k][()] for k in ("lin_phi", "lin_c", "obs") if k in h},
+                harmonics=tuple(int(v) for v in a["harmonics"]),
                 nt=int(a["nt"]), n=int(a["n"]),
                 output_names=tuple(json.loads(a["output_names"])),
                 completed=bool(a["completed"]), failed=bool(a["failed"]),
@@ -270,6 +288,8 @@ class Epmc:
                 "the linear system with every contact stuck is singular: a rigid-body mode is "
                 "held by no support and no contact element")
         self.wn = np.sqrt(lam)
+        self.phi_all = phi
+        self.c_all = np.einsum("ij,ik,kj->j", phi, self.C, phi)  # 2 zeta w (diagonal part)
         mode = check_int("mode", mode, 0, n - 1)
         self.mode = mode
         self.phi = phi[:, mode]
@@ -995,6 +1015,7 @@ def nonlinear_mode(
         check_range("relative_range[0]", lo, 0.0, lo_open=True)
         check_range("relative_range[1]", hi, lo, lo_open=True)
         amplitude_range = (lo * a_slip, hi * a_slip)
+    a_slip = slip_amplitude(system, mode)
     a0, a1 = (float(v) for v in amplitude_range)
     check_range("amplitude_range[0]", a0, 0.0, lo_open=True)
     check_range("amplitude_range[1]", a1, a0, lo_open=True)
@@ -1004,6 +1025,7 @@ def nonlinear_mode(
     message, failed, completed = "", False, False
     s0, s1 = np.log(a0), np.log(a1)
     phi1_ref = None
+    s_slip = float(np.log(0.999 * a_slip)) if system.n_el else -np.inf
 
     def record(y: np.ndarray, a: float, its: int) -> dict[str, Any]:
         nonlocal phi1_ref
@@ -1069,6 +1091,8 @@ def nonlinear_mode(
                     Yn, ok, its = snes.solve(Yp, mw**2 * t, Yp)
                 else:  # the next amplitude, the secant extrapolated to it as predictor
                     dsn = ds * span
+                    if Y[-1] < s_slip - 1e-9 < Y[-1] + dsn:
+                        dsn = s_slip - Y[-1]  # a point just below the first slip (a kink)
                     Yp = Y + t * (dsn / t[-1]) if t[-1] > 1e-12 * span else Y.copy()
                     Yp[-1] = Y[-1] + dsn
                     Yn, ok, its = snes.solve(Yp)
@@ -1136,6 +1160,7 @@ def nonlinear_mode(
     finally:
         snes.destroy()
     n_el = system.n_el
+    prob_phys = prob.phys if isinstance(prob, EpmcCondensed) else prob
     arr: dict[str, np.ndarray] = {}
     shapes = dict(friction_energy=(0, n_el), status=(0, n_el), out_amp=(0, O.shape[0]),
                   out_h1=(0, O.shape[0]), psi=(0, fourier.nh * system.n))
@@ -1149,7 +1174,8 @@ def nonlinear_mode(
         harmonics=fourier.harmonics, nt=fourier.nt, n=system.n, output_names=names,
         completed=completed, failed=failed,
         message=message or ("reached the largest amplitude" if completed else ""),
-        timings=timings, label=label, **arr)
+        timings=timings, label=label, lin_phi=prob_phys.phi_all, lin_c=prob_phys.c_all,
+        obs=O, **arr)
 
 
 class _Stop(Exception):

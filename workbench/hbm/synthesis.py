@@ -26,7 +26,10 @@ mode cannot represent for another force distribution); no other linear
 mode lies within ``separation`` of the frequency (modal interaction); the
 higher harmonics stay below ``higher_max`` of the motion (an internal
 resonance pumps energy into them); the damping ratio stays below
-``damping_max`` (the theory assumes a light, resonant response).
+``damping_max`` (the theory assumes a light, resonant response); the
+other modes' stuck linear response to the same force at the peak frequency
+stays below ``others_max`` of the peak amplitude (what the single mode
+leaves out: a close or strongly driven neighbour).
 """
 
 from __future__ import annotations
@@ -53,13 +56,15 @@ class Synthesis:
     peak_amplitude: float  # output amplitude at the peak
     peak_modal_amplitude: float
     valid: bool
+    peak_h1: float = float("nan")  # harmonic-1 output amplitude at the peak
     reasons: list[str] = field(default_factory=list)
     checks: dict[str, float] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
         return dict(level=self.level, peak_frequency_hz=self.peak_freq_hz,
                     peak_amplitude=self.peak_amplitude,
-                    peak_modal_amplitude=self.peak_modal_amplitude, valid=self.valid,
+                    peak_modal_amplitude=self.peak_modal_amplitude, peak_h1=self.peak_h1,
+                    valid=self.valid,
                     reasons=list(self.reasons), checks=dict(self.checks))
 
 
@@ -81,6 +86,7 @@ def synthesize(
     separation: float = 0.05,
     higher_max: float = 0.2,
     damping_max: float = 0.2,
+    others_max: float = 0.01,
 ) -> Synthesis:
     """The forced response at ``level`` (``f(t) = level Re(f1 exp(i W t))``) from the backbone.
 
@@ -139,6 +145,7 @@ def synthesize(
     xi_pk = at(xi)
     f_pk = at(W) / TWO_PI
     y_pk = float(np.exp(at(np.log(np.maximum(y, 1e-300)))))
+    h1_pk = float(np.exp(at(np.log(np.maximum(nm.out_h1[:, output], 1e-300)))))
     # the curve: both sides of the main branch (the backbone below the peak) and the peak
     main = np.arange(a.size) < j
     left, right = main & np.isfinite(lo_f), main & np.isfinite(hi_f)
@@ -165,6 +172,11 @@ def synthesize(
     if hh > higher_max:
         reasons.append(f"higher harmonics carry {100 * hh:.0f} % of the motion (internal "
                        "resonance?)")
+    others = nm.other_modes_response(np.asarray(f1, complex), f_pk)
+    share = float(np.abs(others[output]) * level / y_pk) if y_pk > 0 and others.size else 0.0
+    if share > others_max:
+        reasons.append(f"the other modes add {100 * share:.1f} % of the peak amplitude (their "
+                       "stuck linear response there): the forced motion is not the mode alone")
     if d_pk > damping_max:
         reasons.append(f"damping ratio {d_pk:.3f} > {damping_max:g} at the peak")
     # a second crossing further up: the full curve may have an isola or a jump there
@@ -175,4 +187,6 @@ def synthesize(
     return Synthesis(
         level=float(level), freq_hz=curve_f, out_amp=curve_y, peak_freq_hz=f_pk,
         peak_amplitude=y_pk, peak_modal_amplitude=a_pk, valid=not blocking, reasons=reasons,
-        checks=dict(mac=mac, separation=gap, higher_harmonics=hh, damping_ratio=d_pk))
+        peak_h1=h1_pk,
+        checks=dict(mac=mac, separation=gap, higher_harmonics=hh, damping_ratio=d_pk,
+                    other_modes=share))

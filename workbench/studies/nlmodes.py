@@ -245,6 +245,7 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
             "microseconds. It is checked automatically at its peak: the shape against the "
             "low-amplitude one (MAC >= 0.9), no other linear mode within 5 % of the "
             "frequency, a backbone that does not fold back in amplitude (modal interaction), "
+            "the other modes adding less than 1 % to the peak (their stuck linear response), "
             "higher harmonics below 20 %, damping ratio below 0.2. Where it is flagged not "
             "valid the full HBM is the answer."],
         "figures": [], "tables": []}
