@@ -40,7 +40,8 @@ def jenkins_df(X: np.ndarray, kt: float, fs: float) -> tuple[np.ndarray, np.ndar
 @pytest.fixture(scope="module")
 def jenkins():
     ex = sdof_jenkins()
-    b = nonlinear_mode(ex.system, harmonics=(1,), outputs=[0], relative_range=(0.1, 1000.0))
+    b = nonlinear_mode(ex.system, harmonics=(1,), outputs=[0], relative_range=(0.1, 1000.0),
+                       n_steps=80)  # fine steps near the damping maximum
     return ex, b
 
 
@@ -83,10 +84,9 @@ def test_jenkins_backbone_against_describing_function(jenkins):
     Dg = c / (2 * m * np.sqrt((k + kq) / m)) + kdg / (2 * (k + kq))
     i, ig = int(np.argmax(b.damping_ratio)), int(np.argmax(Dg))
     assert b.damping_ratio[i] == pytest.approx(Dg[ig], rel=0.01)
-    # where: the vertex of the parabola through the three points around the largest one
-    # (in ln X), since the steps sample a flat maximum
-    c2, c1, _ = np.polyfit(np.log(X[i - 1:i + 2]), b.damping_ratio[i - 1:i + 2], 2)
-    assert np.exp(-c1 / (2 * c2)) == pytest.approx(Xg[ig], rel=0.03)
+    # where: between the neighbours of the largest sampled value, which are close
+    assert X[i - 1] <= Xg[ig] <= X[i + 1]
+    assert X[i + 1] / X[i - 1] < 1.6  # two steps of at most 2 ln(a1/a0) / n_steps
     # friction energy per cycle: 4 Fs (X - Xs) once the element slips
     slip = X > 2 * fs / kt
     e = b.friction_energy[slip, 0]

@@ -130,7 +130,7 @@ def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         model.system, mode=mode, amplitude_range=amps, relative_range=rel,
         harmonics=model.harmonics, nt=model.nt or None, outputs=model.outputs,
         output_names=model.output_names, f1=model.f1, band_hz=model.band_hz, n_steps=steps,
-        dc_anchor=model.options.dc_anchor, label=model.name)
+        dc_anchor=model.options.dc_anchor, levels=model.levels, label=model.name)
     files = {"h5": str(nm.save(out / "backbone.h5")),
              "csv": str(nm.to_csv(out / "backbone.csv", unit=model.length_unit))}
     mm = model.length_unit == "m"

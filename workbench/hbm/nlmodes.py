@@ -980,10 +980,11 @@ def nonlinear_mode(
     max_points: int = 400,
     tol: float = 1e-10,
     tol_stall: float = 1e-7,
-    max_newton: int = 25,
-    max_change: float = 0.1,
+    max_newton: int = 12,
+    max_change: float = 0.25,
     dc_anchor: float = 1e-3,
     space: str = "auto",
+    levels: object = None,
     label: str = "",
 ) -> NlModeBranch:
     """The backbone of one nonlinear mode, continued in modal amplitude.
@@ -997,7 +998,11 @@ def nonlinear_mode(
     pseudo-arc-length steps in ``(psi, w, xi, ln a)`` pass it (a step that
     lands back on a point already computed is refused); the step adapts to
     the Newton iterations and to ``max_change`` (largest relative change of
-    frequency or damping ratio per step). Never raises for a failed solve:
+    frequency or damping ratio per step). With ``f1`` and ``levels`` (the
+    excitation levels to synthesise), the backbone stops once its dissipation
+    ``a xi w`` exceeds twice the largest level's modal force
+    ``|psi_1^H f1|``: every level's peak is then inside it. Never raises for
+    a failed solve:
     the branch says ``failed`` and keeps its points.
     """
     t_start = time.perf_counter()
@@ -1025,6 +1030,8 @@ def nonlinear_mode(
     message, failed, completed = "", False, False
     s0, s1 = np.log(a0), np.log(a1)
     phi1_ref = None
+    f_top = float(max(np.atleast_1d(levels))) if levels is not None and f1 is not None else 0.0
+    f1v = np.asarray(f1, complex).ravel() if f1 is not None else None
     s_slip = float(np.log(0.999 * a_slip)) if system.n_el else -np.inf
 
     def record(y: np.ndarray, a: float, its: int) -> dict[str, Any]:
@@ -1040,6 +1047,10 @@ def nonlinear_mode(
             if k != "newton_its":
                 rows[k].append(pt[k])
         rows["newton_its"].append(its)
+        if f_top > 0 and a * pt["xi"] * TWO_PI * pt["freq_hz"] > 2.0 * f_top * abs(
+                np.conj(pt["phi1"]) @ f1v) and np.any(pt["status"] > 0):
+            raise _Stop(f"covers the largest level ({f_top:g}): its peak is below modal "
+                        f"amplitude {a:.4g}", False, completed=True)
         return pt
 
     from ..log import progress_bar
@@ -1057,7 +1068,7 @@ def nonlinear_mode(
     mw[N] = mw[N + 1] = 3.0
     mw[N + 2] = 1.0 / span
     ds = 1.0 / n_steps
-    ds_max, ds_min = 4.0 / n_steps, 1e-5
+    ds_max, ds_min = 2.0 / n_steps, 1e-5
     cos_max = np.cos(np.radians(30.0))
 
     def norm(v: np.ndarray) -> float:
@@ -1101,8 +1112,8 @@ def nonlinear_mode(
                     change = max(abs(w1 - w0) / w0, abs(d1 - d0) / max(abs(d0), 0.05))
                     step = Yn - Y
                     cosang = float(np.sum(mw**2 * step * t)) / max(norm(step), 1e-300)
-                    if (change > max_change or cosang < cos_max) and ds > 2 * ds_min \
-                            and turns < 4:
+                    if (change > max_change or (arc and cosang < cos_max)) \
+                            and ds > 2 * ds_min and turns < 4:
                         ok = False
                         turns += 1
                     elif cosang < 0.0 and Y_prev is not None:
@@ -1151,7 +1162,7 @@ def nonlinear_mode(
                 ds = float(np.clip(ds * grow, ds_min, ds_max))
             completed = True
     except _Stop as stop:
-        message, failed = str(stop), stop.failed
+        message, failed, completed = str(stop), stop.failed, stop.completed
         (log.warning if failed else log.info)("%s", message)
     except (np.linalg.LinAlgError, FloatingPointError, ArithmeticError, RuntimeError) as e:
         failed = True
@@ -1179,6 +1190,6 @@ def nonlinear_mode(
 
 
 class _Stop(Exception):
-    def __init__(self, message: str, failed: bool):
+    def __init__(self, message: str, failed: bool, completed: bool = False):
         super().__init__(message)
-        self.failed = failed
+        self.failed, self.completed = failed, completed

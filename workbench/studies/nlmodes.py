@@ -39,7 +39,8 @@ log = logging.getLogger(__name__)
 SUB = "nlmodes"
 
 
-def backbone_key(case: Case, relative_range: tuple[float, float], n_steps: int) -> str:
+def backbone_key(case: Case, relative_range: tuple[float, float], n_steps: int,
+                 forces=None) -> str:
     """Cache key of one backbone: the model, the family, the balance settings, the code."""
     from ..io import code_version
 
@@ -51,12 +52,13 @@ def backbone_key(case: Case, relative_range: tuple[float, float], n_steps: int) 
                                                           s["band-out-of-phase"],
                                                           s["band-margin"]],
                    "range": list(relative_range), "steps": int(n_steps),
+                   "top_force": max(forces) if forces else None,
                    "code": [code_version(root / "hbm"), code_version(root / "contact"),
                             code_version(root / "assembly")]}, 16)
 
 
 def family_backbone(prep, case: Case, relative_range: tuple[float, float] = (0.05, 300.0),
-                    n_steps: int = 40):
+                    n_steps: int = 40, forces=None):
     """The backbone of ``case``'s family on a prepared model, with its excitation and band."""
     from ..hbm.nlmodes import nonlinear_mode, pick_mode
     from .runner import band_for
@@ -71,7 +73,7 @@ def family_backbone(prep, case: Case, relative_range: tuple[float, float] = (0.0
         prep.system, mode=mode, relative_range=relative_range,
         harmonics=tuple(s["harmonics"]), nt=s["nt"],
         outputs=model.response_dofs[blade - 1: blade], output_names=(f"blade{blade}_x",),
-        n_steps=n_steps, label=f"{case.damper} {case.phase_deg:g} deg")
+        n_steps=n_steps, f1=f1, levels=forces, label=f"{case.damper} {case.phase_deg:g} deg")
     return nm, f1, band
 
 
@@ -107,7 +109,7 @@ def study_backbones(spec: StudySpec, out: str | Path, *, prepared: dict | None =
     timings: dict[str, float] = {}
     for (md, _ph), cs in groups.items():
         c0 = cs[0]
-        key = backbone_key(c0, relative_range, n_steps)
+        key = backbone_key(c0, relative_range, n_steps, [c.force_n for c in cs])
         h5, npz = ndir / f"{key}.h5", ndir / f"{key}.npz"
         label = f"{c0.damper}, {family_name(c0.phase_deg)}" + (
             f" [{c0.variant}]" if c0.variant else "")
@@ -119,7 +121,8 @@ def study_backbones(spec: StudySpec, out: str | Path, *, prepared: dict | None =
             t0 = time.perf_counter()
             if md not in prepared:
                 prepared[md] = prepare_model(c0, out)
-            nm, f1, band = family_backbone(prepared[md], c0, relative_range, n_steps)
+            nm, f1, band = family_backbone(prepared[md], c0, relative_range, n_steps,
+                                           forces=[c.force_n for c in cs])
             nm.timings["wall"] = time.perf_counter() - t0
             nm.save(h5)
             from ..io import atomic_path
@@ -330,7 +333,7 @@ def fidelity_entry(comp, base, ref, out: str | Path):
     invalid: list[str] = []
     for (p, f), c in zip(comp.conditions, cases, strict=True):
         if p not in by_phase:
-            key = backbone_key(c, (0.05, 300.0), 40)
+            key = backbone_key(c, (0.05, 300.0), 40, [f for _, f in comp.conditions])
             h5, npz = ndir / f"{key}.h5", ndir / f"{key}.npz"
             if h5.is_file() and npz.is_file():
                 nm = NlModeBranch.load(h5)
@@ -339,7 +342,7 @@ def fidelity_entry(comp, base, ref, out: str | Path):
             else:
                 if prep is None:
                     prep = prepare_model(c, out)
-                nm, f1, band = family_backbone(prep, c)
+                nm, f1, band = family_backbone(prep, c, forces=[f for _, f in comp.conditions])
                 nm.save(h5)
                 from ..io import atomic_path
 
