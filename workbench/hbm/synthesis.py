@@ -126,12 +126,17 @@ def synthesize(
     g = a * np.sqrt(h_min) - F
     reasons: list[str] = []
     hit = np.flatnonzero(g >= 0)
+    linear_below = bool(nm.status.size == 0 or not np.any(nm.status[0]))
     if hit.size == 0:
         j, th = nm.n_points - 1, 1.0
         reasons.append("the peak lies beyond the largest amplitude of the backbone")
     elif hit[0] == 0:
-        j, th = 1, 0.0
-        reasons.append("the peak lies below the smallest amplitude of the backbone")
+        # below the first point: linear if every contact sticks there (g and the outputs
+        # are proportional to a), else out of reach
+        j = 1
+        th = float(-g[0] / (g[0] + F[0]) * a[0] / (a[1] - a[0])) if linear_below else 0.0
+        if not linear_below:
+            reasons.append("the peak lies below the smallest amplitude of the backbone")
     else:
         j = int(hit[0])
         th = float(-g[j - 1] / (g[j] - g[j - 1]))
@@ -139,13 +144,29 @@ def synthesize(
     def at(v: np.ndarray) -> float:  # linear in the segment (j-1, j) of the backbone
         return float(v[j - 1] + th * (v[j] - v[j - 1]))
 
-    s = np.log(a)
-    a_pk = float(np.exp(at(s)))
+    # a segment where every contact sticks at both ends is linear: g and the outputs are
+    # proportional to a; elsewhere they are interpolated in ln a (and ln y)
+    stuck = nm.status.size == 0 or not (np.any(nm.status[j - 1]) or np.any(nm.status[j]))
+    hy = nm.out_h1[:, output]
+    scale = 1.0
+    if th < 0:  # linear extrapolation below the first (stuck) point: shapes and rates fixed
+        a_pk = float(a[0] + th * (a[1] - a[0]))
+        scale = a_pk / a[0]
+
+        def at(v: np.ndarray) -> float:  # noqa: F811
+            return float(v[0])
+
+        y_pk, h1_pk = y[0] * scale, hy[0] * scale
+    elif stuck:
+        a_pk = at(a)
+        y_pk, h1_pk = at(y), at(hy)
+    else:
+        a_pk = float(np.exp(at(np.log(a))))
+        y_pk = float(np.exp(at(np.log(np.maximum(y, 1e-300)))))
+        h1_pk = float(np.exp(at(np.log(np.maximum(hy, 1e-300)))))
     w_pk = at(w)
     xi_pk = at(xi)
     f_pk = at(W) / TWO_PI
-    y_pk = float(np.exp(at(np.log(np.maximum(y, 1e-300)))))
-    h1_pk = float(np.exp(at(np.log(np.maximum(nm.out_h1[:, output], 1e-300)))))
     # the curve: both sides of the main branch (the backbone below the peak) and the peak
     main = np.arange(a.size) < j
     left, right = main & np.isfinite(lo_f), main & np.isfinite(hi_f)
