@@ -1109,7 +1109,7 @@ def nonlinear_mode(
                     Yn, ok, its = snes.solve(Yp)
                 if ok:
                     (w0, d0), (w1, d1) = w_d(Y), w_d(Yn)
-                    change = max(abs(w1 - w0) / w0, abs(d1 - d0) / max(abs(d0), 0.02))
+                    change = max(abs(w1 - w0) / w0, abs(d1 - d0) / max(abs(d0), 1e-3))
                     step = Yn - Y
                     cosang = float(np.sum(mw**2 * step * t)) / max(norm(step), 1e-300)
                     if (change > max_change or (arc and cosang < cos_max)) \
