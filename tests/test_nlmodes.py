@@ -140,8 +140,9 @@ def test_sdof_synthesis_reproduces_hbm_peaks():
 def test_two_dof_synthesis_against_full_hbm():
     """Two DOF, normal load following the motion: 4 levels from stuck to sliding.
 
-    Tolerance: 2 % on the peak amplitude (measured 1.4 % at most), 3 % on its
-    frequency (the damped peaks, D up to 0.19, are flat: measured 2.2 %).
+    Tolerance: 2 % on the peak amplitude where the synthesis says it is valid
+    (measured 0.9 % at most), 3 % on its frequency; the level whose peak has
+    a damping ratio of 0.19 (a flat, heavily damped peak, 2.5 % off) is flagged.
     """
     ex = two_dof_contact()
     H = (0, 1, 2, 3)
@@ -151,10 +152,15 @@ def test_two_dof_synthesis_against_full_hbm():
     assert b.mode == 0
     assert b.freq_hz[0] == pytest.approx(b.linear_hz[0], rel=1e-9)
     assert b.freq_hz[-1] < 0.55 * b.freq_hz[0]  # slides: the tangential spring is lost
+    valid = []
     for f_h, a_h, s in _peaks(ex, b, H):
-        assert s.valid, s.reasons
-        assert s.peak_amplitude == pytest.approx(a_h, rel=0.02)
-        assert s.peak_freq_hz == pytest.approx(f_h, rel=0.03)
+        valid.append(s.valid)
+        if s.valid:
+            assert s.peak_amplitude == pytest.approx(a_h, rel=0.02)
+            assert s.peak_freq_hz == pytest.approx(f_h, rel=0.03)
+        else:
+            assert any("damping ratio" in r for r in s.reasons)
+    assert valid == [True, False, True, True]
 
 
 def test_invalid_synthesis_is_detected():

@@ -68,6 +68,16 @@ class Synthesis:
                     reasons=list(self.reasons), checks=dict(self.checks))
 
 
+def _least_stiffness(w: np.ndarray, xi: np.ndarray, c: np.ndarray):
+    """(W, h) with h the least over W of (w^2 - W^2)^2 + (xi w + c (W - w))^2 (Newton)."""
+    W = w.copy()
+    for _ in range(20):
+        d1 = -4 * W * (w**2 - W**2) + 2 * c * (xi * w + c * (W - w))
+        d2 = -4 * w**2 + 12 * W**2 + 2 * c**2
+        W = W - d1 / np.where(np.abs(d2) > 0, d2, 1.0)
+    return W, (w**2 - W**2) ** 2 + (xi * w + c * (W - w)) ** 2
+
+
 def modal_force(nm: NlModeBranch, f1: object) -> np.ndarray:
     """``|psi_1^H f1|`` (N / sqrt(kg) per unit level) at every point of the backbone."""
     a = np.asarray(f1, dtype=complex).ravel()
@@ -85,7 +95,7 @@ def synthesize(
     mac_min: float = 0.9,
     separation: float = 0.05,
     higher_max: float = 0.2,
-    damping_max: float = 0.2,
+    damping_max: float = 0.15,
     others_max: float = 0.01,
 ) -> Synthesis:
     """The forced response at ``level`` (``f(t) = level Re(f1 exp(i W t))``) from the backbone.
@@ -117,12 +127,7 @@ def synthesize(
             hi_f[i] = r[0]
     # the peak: the first amplitude where the least of |modal dynamic stiffness| a over W
     # reaches the modal force
-    W = w.copy()
-    for _ in range(20):  # Newton on dh/dW = 0, h = (w^2 - W^2)^2 + (xi w + c (W - w))^2
-        d1 = -4 * W * (w**2 - W**2) + 2 * c * (xi * w + c * (W - w))
-        d2 = -4 * w**2 + 12 * W**2 + 2 * c**2
-        W = W - d1 / np.where(np.abs(d2) > 0, d2, 1.0)
-    h_min = (w**2 - W**2) ** 2 + (xi * w + c * (W - w)) ** 2
+    W, h_min = _least_stiffness(w, xi, c)
     g = a * np.sqrt(h_min) - F
     reasons: list[str] = []
     hit = np.flatnonzero(g >= 0)
@@ -161,9 +166,42 @@ def synthesize(
         a_pk = at(a)
         y_pk, h1_pk = at(y), at(hy)
     else:
-        a_pk = float(np.exp(at(np.log(a))))
-        y_pk = float(np.exp(at(np.log(np.maximum(y, 1e-300)))))
-        h1_pk = float(np.exp(at(np.log(np.maximum(hy, 1e-300)))))
+        # within the segment: frequency, viscous rate and modal force linear in ln a, the
+        # friction rate xi - c and the outputs per unit a log-linear (power laws, as for a
+        # sliding contact); the root of g by bisection on that model
+        s0, s1_ = np.log(a[j - 1]), np.log(a[j])
+
+        def model(t: float):
+            def lin(v):
+                return v[j - 1] + t * (v[j] - v[j - 1])
+
+            def loglin(v):  # linear where an end is (nearly) zero: the first slip
+                if min(v[j - 1], v[j]) <= 1e-3 * max(v[j - 1], v[j], 1e-300):
+                    return float(lin(v))
+                l0, l1 = np.log(v[j - 1]), np.log(v[j])
+                return float(np.exp(l0 + t * (l1 - l0)))
+
+            cc = lin(c)
+            return (lin(w), cc + loglin(xi - c), cc, lin(F), float(np.exp(s0 + t * (s1_ - s0))))
+
+        def gt(t: float) -> float:
+            ww, xx, cc, ff, aa = model(t)
+            return float(aa * np.sqrt(_least_stiffness(np.array([ww]), np.array([xx]),
+                                                       np.array([cc]))[1][0]) - ff)
+
+        lo_t, hi_t = 0.0, 1.0
+        if gt(lo_t) < 0 <= gt(hi_t):
+            for _ in range(60):
+                mid = 0.5 * (lo_t + hi_t)
+                lo_t, hi_t = (mid, hi_t) if gt(mid) < 0 else (lo_t, mid)
+            th = 0.5 * (lo_t + hi_t)
+        a_pk = model(th)[4]
+
+        def per_a(v):
+            r = np.log(np.maximum(v, 1e-300) / a)
+            return a_pk * float(np.exp(r[j - 1] + th * (r[j] - r[j - 1])))
+
+        y_pk, h1_pk = per_a(y), per_a(hy)
     w_pk = at(w)
     xi_pk = at(xi)
     f_pk = at(W) / TWO_PI

@@ -249,7 +249,7 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
             "low-amplitude one (MAC >= 0.9), no other linear mode within 5 % of the "
             "frequency, a backbone that does not fold back in amplitude (modal interaction), "
             "the other modes adding less than 1 % to the peak (their stuck linear response), "
-            "higher harmonics below 20 %, damping ratio below 0.2. Where it is flagged not "
+            "higher harmonics below 20 %, damping ratio below 0.15. Where it is flagged not "
             "valid the full HBM is the answer."],
         "figures": [], "tables": []}
     rows = res["rows"]
