@@ -74,7 +74,8 @@ def main(argv: list[str] | None = None) -> int:
             ex = line_damper_rig(n_per_line=args.per_line, family=fam, **kw)
             t0 = time.perf_counter()
             nm = nonlinear_mode(ex.system, f1=ex.f1, band_hz=ex.band_hz, harmonics=H,
-                                outputs=ex.outputs, levels=forces, label=f"{dname} {fam}")
+                                outputs=ex.outputs, levels=forces, max_fold_points=20,
+                                label=f"{dname} {fam}")
             t_nm = time.perf_counter() - t0
             t_syn, t_hbm = 0.0, 0.0
             for F in forces:

@@ -985,6 +985,7 @@ def nonlinear_mode(
     dc_anchor: float = 1e-3,
     space: str = "auto",
     levels: object = None,
+    max_fold_points: int = 80,
     label: str = "",
 ) -> NlModeBranch:
     """The backbone of one nonlinear mode, continued in modal amplitude.
@@ -1001,8 +1002,9 @@ def nonlinear_mode(
     frequency or damping ratio per step). With ``f1`` and ``levels`` (the
     excitation levels to synthesise), the backbone stops once its dissipation
     ``a xi w`` exceeds twice the largest level's modal force
-    ``|psi_1^H f1|``: every level's peak is then inside it. Never raises for
-    a failed solve:
+    ``|psi_1^H f1|``: every level's peak is then inside it. A fold that the
+    amplitude does not pass again within ``max_fold_points`` points ends the
+    backbone (completed = False). Never raises for a failed solve:
     the branch says ``failed`` and keeps its points.
     """
     t_start = time.perf_counter()
@@ -1088,7 +1090,7 @@ def nonlinear_mode(
             turns = 0
             arc = 0  # > 0: steps left in pseudo-arc-length mode (a fold in amplitude)
             hist = [Y]
-            s_top = float(Y[-1])
+            s_top, since_top = float(Y[-1]), 0
             while True:
                 if len(rows["amplitude"]) >= max_points:
                     raise _Stop(f"stopped after max_points = {max_points}", False)
@@ -1150,7 +1152,16 @@ def nonlinear_mode(
                             "and does not turn again within a factor 2 (the mode changes "
                             "character, or the free damper's mean position does): it ends "
                             "here", False)
-                s_top = max(s_top, float(Yn[-1]))
+                if Yn[-1] > s_top:
+                    s_top, since_top = float(Yn[-1]), 0
+                else:
+                    since_top += 1
+                    if since_top > max_fold_points:
+                        raise _Stop(
+                            f"the backbone folds back in amplitude after {np.exp(s_top):.4g} "
+                            f"and has not passed it again in {max_fold_points} points (the "
+                            "mode changes character, or the free damper's mean position "
+                            "does): it ends here", False)
                 Y_prev, Y = Y, Yn
                 hist.append(Y)
                 prev = record(snes.unscaled(Y)[0], float(np.exp(Y[-1])), its)
