@@ -128,11 +128,11 @@ def _peaks(ex, b, harmonics):
 def test_sdof_synthesis_reproduces_hbm_peaks():
     ex = sdof_jenkins()
     H = (0, 1, 3)
-    b = nonlinear_mode(ex.system, f1=ex.f1, harmonics=H, outputs=ex.outputs)
+    b = nonlinear_mode(ex.system, f1=ex.f1, harmonics=H, outputs=ex.outputs, levels=ex.levels)
     for f_h, a_h, s in _peaks(ex, b, H):
         assert s.valid, s.reasons
         # the single-mode theory is exact for one DOF but for the shape of the friction
-        # loop at other frequencies: 2 % on the peak (measured: 0.3 % at most)
+        # loop at other frequencies: 2 % on the peak (measured: 0.2 % at most)
         assert s.peak_amplitude == pytest.approx(a_h, rel=0.02)
         assert s.peak_freq_hz == pytest.approx(f_h, rel=0.01)
 
@@ -141,13 +141,13 @@ def test_two_dof_synthesis_against_full_hbm():
     """Two DOF, normal load following the motion: 4 levels from stuck to sliding.
 
     Tolerance: 2 % on the peak amplitude where the synthesis says it is valid
-    (measured 0.9 % at most), 3 % on its frequency; the level whose peak has
-    a damping ratio of 0.19 (a flat, heavily damped peak, 2.5 % off) is flagged.
+    (measured 1.2 % at most), 3 % on its frequency; the level whose peak has
+    a damping ratio of 0.19 (a flat, heavily damped peak) is flagged.
     """
     ex = two_dof_contact()
     H = (0, 1, 2, 3)
     b = nonlinear_mode(ex.system, f1=ex.f1, band_hz=ex.band_hz, harmonics=H,
-                       outputs=ex.outputs)
+                       outputs=ex.outputs, levels=ex.levels)
     assert b.completed, b.message
     assert b.mode == 0
     assert b.freq_hz[0] == pytest.approx(b.linear_hz[0], rel=1e-9)

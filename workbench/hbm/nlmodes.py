@@ -986,6 +986,7 @@ def nonlinear_mode(
     space: str = "auto",
     levels: object = None,
     max_fold_points: int = 80,
+    refine_ratio: float = 1.02,
     label: str = "",
 ) -> NlModeBranch:
     """The backbone of one nonlinear mode, continued in modal amplitude.
@@ -1004,7 +1005,9 @@ def nonlinear_mode(
     ``a xi w`` exceeds twice the largest level's modal force
     ``|psi_1^H f1|``: every level's peak is then inside it. A fold that the
     amplitude does not pass again within ``max_fold_points`` points ends the
-    backbone (completed = False). Never raises for a failed solve:
+    backbone (completed = False). With ``levels``, a point is then solved at
+    each level's synthesised peak where the backbone's segment there spans
+    more than ``refine_ratio`` in amplitude. Never raises for a failed solve:
     the branch says ``failed`` and keeps its points.
     """
     t_start = time.perf_counter()
@@ -1036,8 +1039,11 @@ def nonlinear_mode(
     f1v = np.asarray(f1, complex).ravel() if f1 is not None else None
     s_slip = float(np.log(0.999 * a_slip)) if system.n_el else -np.inf
 
+    ys: list[tuple[np.ndarray, float]] = []  # the unknowns of every recorded point
+
     def record(y: np.ndarray, a: float, its: int) -> dict[str, Any]:
         nonlocal phi1_ref
+        y_unknowns = (y.copy(), float(a))
         y, a = prob.physical(y, a)
         pt = prob.point(y, a, phi1_ref)
         if phi1_ref is None:
@@ -1049,6 +1055,7 @@ def nonlinear_mode(
             if k != "newton_its":
                 rows[k].append(pt[k])
         rows["newton_its"].append(its)
+        ys.append(y_unknowns)
         if f_top > 0 and a * pt["xi"] * TWO_PI * pt["freq_hz"] > 2.0 * f_top * abs(
                 np.conj(pt["phi1"]) @ f1v) and np.any(pt["status"] > 0):
             raise _Stop(f"covers the largest level ({f_top:g}): its peak is below modal "
@@ -1179,25 +1186,80 @@ def nonlinear_mode(
         failed = True
         message = f"stopped by a numerical error: {type(e).__name__}: {e}"
         log.warning("%s", message)
-    finally:
-        snes.destroy()
     n_el = system.n_el
     prob_phys = prob.phys if isinstance(prob, EpmcCondensed) else prob
-    arr: dict[str, np.ndarray] = {}
-    shapes = dict(friction_energy=(0, n_el), status=(0, n_el), out_amp=(0, O.shape[0]),
-                  out_h1=(0, O.shape[0]), psi=(0, fourier.nh * system.n))
-    for k, v in rows.items():
-        arr[k] = np.array(v) if v else np.zeros(shapes.get(k, (0,)))
-    arr["status"] = arr["status"].astype(np.int8)
-    arr["newton_its"] = arr["newton_its"].astype(int)
-    timings = dict(total=time.perf_counter() - t_start, aft=prob.stats["t_aft"])
-    return NlModeBranch(
-        mode=mode, f_stuck_hz=prob.w_lin / TWO_PI, linear_hz=prob.wn / TWO_PI,
-        harmonics=fourier.harmonics, nt=fourier.nt, n=system.n, output_names=names,
-        completed=completed, failed=failed,
-        message=message or ("reached the largest amplitude" if completed else ""),
-        timings=timings, label=label, lin_phi=prob_phys.phi_all, lin_c=prob_phys.c_all,
-        obs=O, **arr)
+
+    def branch() -> NlModeBranch:
+        arr: dict[str, np.ndarray] = {}
+        shapes = dict(friction_energy=(0, n_el), status=(0, n_el), out_amp=(0, O.shape[0]),
+                      out_h1=(0, O.shape[0]), psi=(0, fourier.nh * system.n))
+        for k, v in rows.items():
+            arr[k] = np.array(v) if v else np.zeros(shapes.get(k, (0,)))
+        arr["status"] = arr["status"].astype(np.int8)
+        arr["newton_its"] = arr["newton_its"].astype(int)
+        timings = dict(total=time.perf_counter() - t_start, aft=prob.stats["t_aft"])
+        return NlModeBranch(
+            mode=mode, f_stuck_hz=prob.w_lin / TWO_PI, linear_hz=prob.wn / TWO_PI,
+            harmonics=fourier.harmonics, nt=fourier.nt, n=system.n, output_names=names,
+            completed=completed, failed=failed,
+            message=message or ("reached the largest amplitude" if completed else ""),
+            timings=timings, label=label, lin_phi=prob_phys.phi_all, lin_c=prob_phys.c_all,
+            obs=O, **arr)
+
+    try:
+        if f_top > 0 and len(ys) >= 2:
+            _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, refine_ratio)
+    except (_Stop, np.linalg.LinAlgError, FloatingPointError, ArithmeticError,
+            RuntimeError) as e:
+        log.info("refinement at the peaks stopped: %s", e)
+    finally:
+        snes.destroy()
+    return branch()
+
+
+def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) -> None:
+    """Add solved points at the synthesised peak of every level where the backbone is coarse.
+
+    For each level (up to three passes) the peak's modal amplitude is found
+    on the current backbone; if its segment spans more than ``ratio`` in
+    amplitude and increases monotonically, the point at the peak's
+    amplitude is solved (predictor: the segment's unknowns interpolated in
+    ``ln a``) and inserted in order. The synthesis is then exact to the
+    point solved, not to an interpolation over a coarse segment.
+    """
+    from .synthesis import synthesize
+
+    for _ in range(3):
+        nm = branch()
+        added = 0
+        for lv in sorted(set(float(v) for v in np.atleast_1d(levels))):
+            try:
+                s = synthesize(nm, f1v, lv)
+            except InputError:
+                return
+            a = nm.amplitude
+            j = int(np.searchsorted(a, s.peak_modal_amplitude))
+            if not 0 < j < a.size or a[j] / a[j - 1] <= ratio or np.any(np.diff(a[: j + 1]) <= 0):
+                continue
+            (y0, p0), (y1, p1) = ys[j - 1], ys[j]
+            # the continuation parameter of the target (the physical amplitude is a_M)
+            th = np.log(s.peak_modal_amplitude / a[j - 1]) / np.log(a[j] / a[j - 1])
+            pt = float(np.exp(np.log(p0) + th * (np.log(p1) - np.log(p0))))
+            Yg = snes.scaled(y0 + th * (y1 - y0), np.log(pt))
+            Y, ok, its = snes.solve(Yg)
+            if not ok:
+                continue
+            n_before = len(rows["amplitude"])
+            record(snes.unscaled(Y)[0], float(np.exp(Y[-1])), its)
+            if len(rows["amplitude"]) == n_before:
+                continue
+            for key in rows:  # move the new point into amplitude order
+                rows[key].insert(j, rows[key].pop())
+            ys.insert(j, ys.pop())
+            added += 1
+            nm = branch()
+        if not added:
+            return
 
 
 class _Stop(Exception):
