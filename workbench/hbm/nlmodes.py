@@ -1253,6 +1253,11 @@ def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) 
             record(snes.unscaled(Y)[0], float(np.exp(Y[-1])), its)
             if len(rows["amplitude"]) == n_before:
                 continue
+            if not a[j - 1] < rows["amplitude"][-1] < a[j]:  # off its segment: dropped
+                for key in rows:
+                    rows[key].pop()
+                ys.pop()
+                continue
             for key in rows:  # move the new point into amplitude order
                 rows[key].insert(j, rows[key].pop())
             ys.insert(j, ys.pop())

@@ -213,7 +213,7 @@ def synthesize(
     if band_hz is not None:
         keep = (curve_f >= band_hz[0]) & (curve_f <= band_hz[1])
         curve_f, curve_y = curve_f[keep], curve_y[keep]
-    if np.any(np.diff(a[: j + 1]) <= 0):
+    if np.any(np.diff(a[: j + 1]) < -1e-9 * a[: j].max(initial=0.0)):
         reasons.append("the backbone folds back in amplitude below the peak (the mode "
                        "changes character: modal interaction)")
     # validity at the peak
