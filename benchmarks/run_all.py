@@ -3,6 +3,7 @@
 Parts (``--parts``, default all, in this order):
 
     hbm         benchmarks/bench_hbm.py: harmonic balance curves (single DOF to 146 pairs)
+    nlmodes     benchmarks/bench_nlmodes.py: 6 nonlinear modes + synthesis against 42 curves
     fe          benchmarks/bench_fe.py: meshing, assembly, eigen solve and reduction
                 against the number of DOFs, serial and on 2 ranks (the longest part)
     slow-tests  the tests marked ``slow`` (pytest -m slow)
@@ -32,7 +33,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 PY = sys.executable
 UPD = str(Path(PY).with_name("upd"))
-PARTS = ("hbm", "fe", "slow-tests", "fidelity", "robustness")
+PARTS = ("hbm", "nlmodes", "fe", "slow-tests", "fidelity", "robustness")
 
 
 def command(part: str, out: Path) -> list[str]:
@@ -40,6 +41,7 @@ def command(part: str, out: Path) -> list[str]:
     d = str(out / part)
     return {
         "hbm": [PY, str(ROOT / "benchmarks" / "bench_hbm.py"), "--out", d],
+        "nlmodes": [PY, str(ROOT / "benchmarks" / "bench_nlmodes.py"), "--out", d],
         "fe": [PY, str(ROOT / "benchmarks" / "bench_fe.py"), "--out", d],
         "slow-tests": [PY, "-m", "pytest", "-q", "-m", "slow", "-p", "no:cacheprovider"],
         "fidelity": [UPD, "study", str(ROOT / "studies" / "fidelity.toml"), "--out", d],

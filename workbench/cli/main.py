@@ -36,7 +36,7 @@ from .. import __version__
 from ..errors import InputError, WorkbenchError
 from ..io import to_jsonable
 
-COMMANDS = ["analytic", "mesh", "modes", "reduce", "screen", "frf", "study", "report"]
+COMMANDS = ["analytic", "mesh", "modes", "reduce", "screen", "frf", "nlmodes", "study", "report"]
 
 log = logging.getLogger("workbench.cli")
 

@@ -513,6 +513,10 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     comp.run(settings, spec.name)
     for st in settings:
         st.errors = relative_errors(st, ref)
+    if getattr(spec, "nonlinear_modes", False):  # the nonlinear-mode synthesis entry (nlmodes.py)
+        from .nlmodes import fidelity_entry
+
+        settings.append(fidelity_entry(comp, settings[0], ref, out))
 
     pick = None
     combos: list[dict[str, Any]] = []

@@ -333,6 +333,7 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     t_scr = time.perf_counter()
     screen_rows = study_screens(cases, prepared, out, spec.phases, max(spec.forces), comm=comm)
     timings["coupling screen"] = time.perf_counter() - t_scr
+    nl_res = _nonlinear_modes(spec, out, prepared, cases, comm, timings)
 
     # 3. gather, post-process and report on rank 0
     results = StudyResults(name=spec.name, kind=spec.kind,
@@ -348,6 +349,8 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
             md: {str(ph): list(b) for ph, b in p.bands.items()} for md, p in prepared.items()}
         results.extras["failures"] = failures
         results.extras["screen"] = screen_rows
+        if nl_res is not None:
+            results.extras["nlmodes"] = nl_res
         results.extras["n_computed"] = len(todo)
         results.extras["n_reused"] = len(cases) - len(todo)
         write_outputs(results, spec, out, prepared)
@@ -494,8 +497,13 @@ def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
     timings = dict(results.timings)
     for k, v in (results.extras.get("cached_costs") or {}).items():
         timings[f"{k}, reused from the cache (its cost when computed)"] = v
+    sections = _sections(results, out)
+    if results.extras.get("nlmodes"):  # backbones and synthesis (workbench/studies/nlmodes.py)
+        from .nlmodes import nlmode_sections
+
+        sections += nlmode_sections(results.extras["nlmodes"], out)
     write_manifest_and_report(out, spec, f"{spec.kind} study,", headline(results),
-                              timings, _sections(results, out))
+                              timings, sections)
 
 
 def write_manifest_and_report(out: Path, spec: StudySpec, subtitle: str, summary: list[str],
@@ -516,6 +524,19 @@ def write_manifest_and_report(out: Path, spec: StudySpec, subtitle: str, summary
     }
     write_json(out / "manifest.json", manifest)
     write_report(out)
+
+
+def _nonlinear_modes(spec: StudySpec, out: Path, prepared: dict, cases: list[Case], comm,
+                     timings: dict[str, float]) -> dict | None:
+    """Backbones and syntheses of a comparison study with ``nonlinear-modes`` (rank 0)."""
+    if spec.kind != "comparison" or not getattr(spec, "nonlinear_modes", False):
+        return None
+    from .nlmodes import study_backbones
+
+    t0 = time.perf_counter()
+    res = study_backbones(spec, out, prepared=prepared, cases=cases, comm=comm)
+    timings["nonlinear modes"] = time.perf_counter() - t0
+    return res
 
 
 def _sections(results: StudyResults, out: Path) -> list[dict]:

@@ -107,6 +107,9 @@ OPTIONS: tuple[Option, ...] = (
     Option("max-points", "int", 400, "largest number of continuation points per curve",
            "solver", lo=5, hi=100000),
     Option("stability", "bool", True, "Hill stability of every point", "solver"),
+    Option("nonlinear-modes", "bool", False, "comparison study: also one nonlinear mode "
+           "(backbone) per damper and family, the forced responses synthesised from it and "
+           "their check against the curves (workbench/studies/nlmodes.py)", "solver"),
     # sweeps and the fidelity/robustness studies
     Option("sweep", "str", None, "name of a scalar option to sweep (e.g. cf, cone-angle, mu)",
            "sweep", optional=True),

@@ -1,0 +1,59 @@
+"""``upd nlmodes`` on a model file and (slow) on a study file, and the study report."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from conftest import ROOT, assert_nonblank, run_upd
+
+
+def test_nlmodes_model_file(tmp_path):
+    out = tmp_path / "nm"
+    r = run_upd("nlmodes", ROOT / "studies" / "examples" / "two_dof_contact.toml",
+                "--levels", "2", "--harmonics", "0,1,2,3", "--nt", "64", "--compare", "--json",
+                "--out", out)
+    assert r.code == 0, r
+    s = r.json
+    bb = s["backbone"]
+    assert bb["completed"] and bb["f_stuck_hz"] == pytest.approx(186.42, rel=1e-3)
+    assert bb["freq_last_hz"] < 100.0 < bb["freq_at_damping_max_hz"]
+    assert len(s["levels"]) == 1
+    for row in s["levels"]:
+        assert row["valid"]
+        assert abs(row["error_pct"]) < 2.0  # synthesis against the full HBM of the level
+    for key in ("backbone_png", "synthesis_png"):
+        assert_nonblank(s["files"][key])
+    assert (out / "backbone.h5").is_file() and (out / "backbone.csv").is_file()
+    assert json.loads((out / "summary.json").read_text())["name"] == "two_dof_contact"
+
+
+def test_nlmodes_bad_input(tmp_path):
+    r = run_upd("nlmodes", ROOT / "studies" / "examples" / "two_dof_contact.toml",
+                "--range", "1", "--out", tmp_path)
+    assert r.code == 2 and "--range" in r.err
+    r = run_upd("nlmodes", tmp_path / "missing.toml")
+    assert r.code == 2
+
+
+@pytest.mark.slow
+def test_study_with_nonlinear_modes(tmp_path):
+    """The smallest real study with its backbone, synthesis and HBM check in the report."""
+    out = tmp_path / "tiny"
+    r = run_upd("study", ROOT / "tests" / "studies" / "tiny.toml", "--nonlinear-modes",
+                "--no-stability", "--json", "--out", out, timeout=3000)
+    assert r.code == 0, r
+    man = json.loads((out / "manifest.json").read_text())
+    ids = [s["id"] for s in man["sections"]]
+    assert "nlmodes" in ids and "nlmodes-synthesis" in ids
+    for sec in man["sections"]:
+        if sec["id"].startswith("nlmodes"):
+            for f in sec["figures"]:
+                assert_nonblank(out / f["path"])
+    html = (out / "report.html").read_text()
+    assert "backbone" in html
+    # a second run reuses the backbone (cached with the cases)
+    r = run_upd("nlmodes", ROOT / "tests" / "studies" / "tiny.toml", "--json", "--out", out)
+    assert r.code == 0, r
+    rows = r.json["rows"]
+    assert rows and all(row["hbm_peak_amplitude_mm"] is not None for row in rows)
