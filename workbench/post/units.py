@@ -13,7 +13,10 @@ from typing import Any
 # Branch datasets (workbench.hbm.branch); "L" is the model's length unit
 BRANCH_UNITS: dict[str, tuple[str, str]] = {
     "freq_hz": ("Hz", "excitation frequency of each point, in continuation order"),
-    "stable": ("1", "Hill stability of each point (True: stable)"),
+    "stable": ("1", "Hill stability of each point (True: stable; unknown counts as not)"),
+    "stability": ("1", "Hill stability of each point: 1 stable, 0 unstable, -1 unknown"),
+    "accuracy": ("1", "loop energy against harmonic contact work, over the excitation work"),
+    "out_rms": ("L", "RMS of y(t) over the period, per output"),
     "newton_its": ("1", "Newton iterations of the corrector"),
     "energy_residual": ("1", "relative energy balance residual per cycle"),
     "out_amp": ("L", "largest |y(t)| over the period, per output"),
