@@ -123,3 +123,23 @@ def test_single_mode_rule_against_the_harmonic_balance_of_a_jenkins_oscillator()
 def test_bad_damping_is_refused_with_its_name():
     with pytest.raises(InputError, match="zeta"):
         screen(sdof(), 0.0)
+
+
+def test_design_rule_chart_draws_the_screen_beside_the_harmonic_balance(tmp_path):
+    """The sweep report's chart: non-blank, log k2/k axis when k2/k spans decades."""
+    from tests.conftest import assert_nonblank
+    from workbench.render.screen_figures import plot_design_rule
+
+    pts = [{"damper": "cone", "family": fam, "variant": f"cone-angle={a}", "k2_over_k": k,
+            "bound_k2_over_k": 2 * k, "f_cap_n": cap, "growth": g, "growth_nl": gn,
+            "energy_mj": e, "peak_top_mm": 0.3, "f_ref_n": 9.6, "f_top_n": 30.0,
+            "verdict": "damps, separates" if fam == "in-phase" else "levels off"}
+           for fam, a, k, cap, g, gn, e in (("in-phase", 5, 0.005, 17.0, 2.3, 3.0, 3.6),
+                                            ("in-phase", 10, 0.02, 37.0, 1.8, 2.7, 14.2),
+                                            ("out-of-phase", 5, 0.44, 390.0, 1.05, 1.1, 10.4),
+                                            ("out-of-phase", 10, 0.43, 370.0, 1.06, 1.13, None))]
+    fig = plot_design_rule(pts, None)
+    assert fig.axes[0].get_xscale() == "log"
+    assert "k2/k" in fig.axes[0].get_xlabel()
+    png = plot_design_rule(pts, tmp_path / "rule.png")
+    assert_nonblank(png)

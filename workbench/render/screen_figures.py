@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .common import pyplot, save_figure
+from .common import pyplot, save_figure, styled
 
 
 def design_rule_points(cases: Sequence[Any], screen_rows: Sequence[dict[str, Any]]
@@ -59,15 +59,20 @@ def _reached(case: Any) -> bool:
     return bool(b.completed) and not bool(b.failed) and case.peak_index >= 0
 
 
-def plot_design_rule(points: Sequence[dict[str, Any]], path: str | Path, *,
-                     title: str = "") -> Path:
-    """Peak growth and friction energy against k2/k and the predicted saturation force."""
+@styled
+def plot_design_rule(points: Sequence[dict[str, Any]], path: str | Path | None, *,
+                     title: str = "") -> Any:
+    """Peak growth and friction energy against k2/k and the predicted saturation force.
+
+    Writes a PNG at ``path`` (or returns the Figure when ``path`` is None)."""
+    import matplotlib
+
     plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(13.5, 4.2))
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for p in points:
         groups.setdefault((p["damper"], p["family"]), []).append(p)
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    colors = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     seps: list[str] = []
     f_top = points[0]["f_top_n"] if points else 0.0
     f_ref = points[0]["f_ref_n"] if points else 0.0
