@@ -182,7 +182,8 @@ def test_a_second_run_on_the_same_folder_is_refused_at_once(warm, tmp_path):
     log = tmp_path / "first.err"
     with log.open("w") as fh:  # with its progress bars, as a user sees it
         first = subprocess.Popen([*CMD, "--out", str(out)], cwd=ROOT, stdout=subprocess.DEVNULL,
-                                 stderr=fh, env=dict(os.environ, UPD_NO_PROGRESS="0"))
+                                 stderr=fh, env=dict(os.environ, UPD_NO_PROGRESS="0",
+                                                     UPD_PROGRESS="always"))
     try:
         _wait_for(log, "model for cone", first)
         t0 = time.time()
@@ -206,8 +207,12 @@ def test_ctrl_c_during_the_curves_of_a_second_run(warm, tmp_path):
     out = _copy(warm, tmp_path / "s", drop_cases=True)
     log = tmp_path / "run.err"
     with log.open("w") as fh:
+        # a run started in the background of a script inherits SIGINT ignored (and then
+        # rightly ignores Ctrl-C); the test is about our handler, so the child starts with
+        # the default disposition whatever the test runner's
         p = subprocess.Popen([*CMD, "--out", str(out)], cwd=ROOT, stdout=subprocess.DEVNULL,
-                             stderr=fh)
+                             stderr=fh,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         _wait_for(log, "cases to compute", p)
         p.send_signal(signal.SIGINT)
