@@ -9,6 +9,8 @@ Parts (``--parts``, default all, in this order):
     slow-tests  the tests marked ``slow`` (pytest -m slow)
     fidelity    upd study studies/fidelity.toml: error against compute time per knob
     robustness  upd study studies/robustness.toml: the failure map of the solution methods
+    runup       benchmarks/runup_ratchet.py: the cylinder out of phase at 9.6 N on the
+                paper-like rig, harmonic balance against a 400-period run-up from rest
 
 Each part writes into its own folder under ``--out`` and its console output
 to ``<part>.log`` there; ``summary.json`` records the exit code and wall
@@ -33,7 +35,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 PY = sys.executable
 UPD = str(Path(PY).with_name("upd"))
-PARTS = ("hbm", "nlmodes", "fe", "slow-tests", "fidelity", "robustness")
+PARTS = ("hbm", "nlmodes", "fe", "slow-tests", "fidelity", "robustness", "runup")
 
 
 def command(part: str, out: Path) -> list[str]:
@@ -46,6 +48,8 @@ def command(part: str, out: Path) -> list[str]:
         "slow-tests": [PY, "-m", "pytest", "-q", "-m", "slow", "-p", "no:cacheprovider"],
         "fidelity": [UPD, "study", str(ROOT / "studies" / "fidelity.toml"), "--out", d],
         "robustness": [UPD, "study", str(ROOT / "studies" / "robustness.toml"), "--out", d],
+        "runup": [PY, str(ROOT / "benchmarks" / "runup_ratchet.py"), "--periods", "400",
+                  "--out", d],
     }[part]
 
 
