@@ -151,8 +151,8 @@ def plot_knob(knob: str, levels: Sequence[str], times_s: Sequence[float],
 
 
 def pareto_indices(times: Sequence[float], errs: Sequence[float | None]) -> list[int]:
-    """Non-dominated (time, error) points, cheapest first (see studies.fidelity.pareto_front)."""
-    from ..studies.fidelity import pareto_front
+    """Non-dominated (time, error) points, cheapest first (see post.pareto.pareto_front)."""
+    from ..post.pareto import pareto_front
 
     return pareto_front(list(zip(times, errs, strict=True)))
 

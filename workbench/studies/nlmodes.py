@@ -318,7 +318,7 @@ def fidelity_entry(comp, base, ref, out: str | Path):
     """
     from ..hbm.nlmodes import NlModeBranch
     from ..hbm.synthesis import synthesize
-    from .fidelity import QUANTITIES, Setting, condition_name
+    from ..post.fidelity import QUANTITIES, Setting, condition_name
     from .runner import prepare_model
 
     out = Path(out)
