@@ -54,6 +54,9 @@ class Case:
                 **{k: self.settings[k] for k in SOLVE_KEYS}}
 
 
+NLMODE_SOURCES = ("nlmodes.py", "epmc.py", "nlmode_branch.py", "synthesis.py")
+
+
 def solver_code_version() -> str:
     """A hash of the sources that turn a reduced model into a case's curve.
 
@@ -65,9 +68,10 @@ def solver_code_version() -> str:
 
     root = Path(__file__).resolve().parents[1]
     parts = [code_version(root / pkg) for pkg in ("contact", "assembly")]
-    # the nonlinear modes (hbm/nlmodes.py, hbm/synthesis.py) do not shape a forced response
+    # the nonlinear modes (hbm/nlmodes.py, epmc.py, nlmode_branch.py, synthesis.py) do not
+    # shape a forced response
     hbm = tuple(p.name for p in sorted((root / "hbm").glob("*.py"))
-                if p.name not in ("nlmodes.py", "synthesis.py"))
+                if p.name not in NLMODE_SOURCES)
     parts.insert(1, code_version(root / "hbm", hbm))
     parts.append(code_version(root / "studies", ("plan.py", "runner.py")))
     return digest(parts, 12)
