@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from .common import pyplot, save_figure, styled
-from .study_figures import _EXTRA_COLORS, FIGSIZE, force_colors
+from .study_style import _EXTRA_COLORS, FIGSIZE, force_colors
 
 ERR_FLOOR = 1e-4  # percent
 QUANTITY_TITLES = {"peak_amplitude_mm": "peak amplitude",
