@@ -69,8 +69,9 @@ from .fidelity_plan import (
     plan_settings,
     propose_combination,
 )
+from .outputs import write_manifest_and_report
 from .plan import Case, make_case
-from .runner import case_done, write_manifest_and_report
+from .runner import case_done
 from .spec import StudySpec
 
 log = logging.getLogger(__name__)

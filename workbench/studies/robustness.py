@@ -50,6 +50,7 @@ import numpy as np
 from ..errors import InputError, SolveError
 from ..io import digest, write_json
 from ..post.tables import write_rows_csv
+from .outputs import write_manifest_and_report
 from .robustness_time import (
     TIME_MODELS,
     TimeModel,
@@ -60,7 +61,6 @@ from .robustness_time import (
     time_checks,
     turning_points,
 )
-from .runner import write_manifest_and_report
 from .spec import ROBUSTNESS_CASES, ROBUSTNESS_METHODS, StudySpec
 
 log = logging.getLogger(__name__)

@@ -491,7 +491,7 @@ def write_uncertainty_outputs(spec: StudySpec, out: Path, design: Design,
                               timings: dict[str, float]) -> None:
     """Tables, HDF5, figures, ``uncertainty.json``, manifest and report."""
     from ..post.tables import write_rows_csv
-    from .runner import write_manifest_and_report
+    from .outputs import write_manifest_and_report
 
     tables = out / "tables"
     write_rows_csv(tables / "uncertainty_answer.csv", answer_rows(a))
