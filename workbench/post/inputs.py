@@ -71,7 +71,7 @@ def used_inputs(values: dict[str, Any], sources: dict[str, str] | None = None,
     names = KIND_OPTIONS.get(kind, KIND_OPTIONS["comparison"])
     dampers = list(values.get("dampers") or [])
     if kind == "robustness":
-        from ..studies.robustness import CASES
+        from ..study_options import CASES
 
         dampers = sorted({CASES[n].damper for n in values.get("hard-cases") or [] if n in CASES})
     has_line = any(d in _LINE for d in dampers)

@@ -425,7 +425,7 @@ def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
 
 def _screen(b: _Builder, rows: list[dict[str, Any]]) -> None:
     """The linear coupling screen of every model (workbench.assembly.screen)."""
-    from ..studies.screening import table as screen_table
+    from ..post.screen_table import table as screen_table
 
     head, body = screen_table(rows)
     f_max = rows[0].get("f_max_n")

@@ -31,7 +31,7 @@ from .study_style import (
 def option_label(option: str) -> tuple[str, str]:
     """(description, unit) of a study option from its help text, e.g. ("centrifugal force
     on the damper", "N"); ("option", "-") for an unknown one."""
-    from ..studies.spec import BY_NAME
+    from ..study_options import BY_NAME
 
     o = BY_NAME.get(option) or BY_NAME.get(option.replace("_", "-"))
     if o is None:
