@@ -98,7 +98,8 @@ class _Computer:
         self.n_reused = 0
         self.n_models_prepared = 0
         self._fresh: set[str] = set()  # case digests computed in this run (force: redo once)
-        self._prepared: dict[str, Any] = {}
+        self._prepared: dict[str, Any] = {}  # model digest -> PreparedModel (one at a time)
+        self._model_stage_times: dict[str, dict[str, float]] = {}  # model digest -> stage -> s
 
     def cases(self, st: Setting) -> list[Case]:
         s = _settings_dict(self.base, st.values)
@@ -153,12 +154,13 @@ class _Computer:
                     prep = prepare_model(c, self.out, force=self.force
                                          and c.model_digest not in self._fresh)
                     self._fresh.add(c.model_digest)
-                    prep.model_times = self._model_times(c, prep)  # type: ignore[attr-defined]
+                    self._model_stage_times[c.model_digest] = self._model_times(c, prep)
                     self._prepared[c.model_digest] = prep
                     self.n_models_prepared += 1
                 res = solve_case(prep, c)
                 res.save(self.case_dir / f"{c.digest}.h5")
-                times = dict(prep.model_times, hbm=float(res.timings.get("hbm", 0.0)))  # type: ignore[attr-defined]
+                times = dict(self._model_stage_times[c.model_digest],
+                             hbm=float(res.timings.get("hbm", 0.0)))
                 write_json(self.time_dir / f"case-{c.digest}.json", times)
                 self._fresh.add(c.digest)
                 self.n_computed += 1
