@@ -15,17 +15,15 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import InputError
+from ..geometry.shapes import all_shapes
 from ..post.results import STATUS_NAMES, CaseResult
 from ..post.tables import stability_runs as _runs
 from .common import readable_log
 
 # colour, line style, marker of each damper (the paper: cone solid, cylinder dashed, wedge dotted)
 
-DAMPER_STYLE: dict[str, tuple[str, str, str]] = {
-    "cone": ("#1f6fb4", "-", "o"),
-    "cylinder": ("#ff7f0e", "--", "s"),
-    "wedge": ("#b8860b", ":", "^"),
-}
+# (each shape names its own: workbench/geometry/shapes/<name>.py)
+DAMPER_STYLE: dict[str, tuple[str, str, str]] = {s.name: s.style for s in all_shapes()}
 
 
 _EXTRA_COLORS = ("#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#7f7f7f")
@@ -46,9 +44,10 @@ FIGSIZE = (7.2, 4.6)  # inches; the report shows them at 110 dpi
 
 def damper_style(damper: str) -> tuple[str, str, str]:
     """(colour, line style, marker) of a damper; a variant ("cone-12deg") inherits its base's."""
-    if damper in DAMPER_STYLE:
-        return DAMPER_STYLE[damper]
-    for base, style in DAMPER_STYLE.items():
+    styles = {sh.name: sh.style for sh in all_shapes()}  # the registry, as it is now
+    if damper in styles:
+        return styles[damper]
+    for base, style in styles.items():
         if damper.startswith(base):
             return style
     k = zlib.crc32(damper.encode()) % len(_EXTRA_COLORS)

@@ -119,12 +119,14 @@ def remove_stale_parts(out: Path) -> int:
 
 def geometry_request(case: Case) -> dict[str, Any]:
     """build_geometry arguments for a case (overrides from the study options)."""
+    from ..geometry.shapes import get as get_shape
+
     s = case.settings
     overrides: dict[str, Any] = {}
-    if s.get("points-per-line") is not None and case.damper in ("cone", "cylinder"):
-        overrides.setdefault(case.damper, {})["n_contact_points"] = int(s["points-per-line"])
-    if s.get("cone-angle") is not None and case.damper == "cone":
-        overrides.setdefault("cone", {})["semi_angle_deg"] = float(s["cone-angle"])
+    # the study options that reach this shape's parameters (points-per-line, cone-angle, ...)
+    for option, (name, kind) in get_shape(case.damper).study_options.items():
+        if s.get(option) is not None:
+            overrides.setdefault(case.damper, {})[name] = kind(s[option])
     return {"damper": case.damper, "geometry_file": s.get("geometry"),
             "size_mm": s.get("mesh-size"), "overrides": overrides or None}
 
