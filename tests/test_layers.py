@@ -1,4 +1,4 @@
-"""The dependency direction of the package: the figures and tables never import a study.
+"""The shape of the package: the figures and tables never import a study; modules stay short.
 
 ``workbench.render`` draws and writes what it is given (post-processed
 records and plain data); ``workbench.post`` computes those records. Neither
@@ -61,3 +61,12 @@ def test_the_scan_sees_relative_local_and_package_imports():
     mods = imported_modules(src, "workbench.render.x")
     assert sorted({line for line, m in mods if _is_studies(m)}) == [1, 2, 4]
     assert (6, "workbench.render.common") in mods
+
+
+MAX_LINES = 600  # a module a newcomer can hold in their head (issue 14)
+
+
+def test_no_module_is_over_600_lines():
+    long = {str(p.relative_to(PKG.parent)): n for p in sorted(PKG.rglob("*.py"))
+            if (n := len(p.read_text().splitlines())) > MAX_LINES}
+    assert not long, f"modules over {MAX_LINES} lines (split them by concept): {long}"

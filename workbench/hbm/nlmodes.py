@@ -55,7 +55,8 @@ import scipy.linalg as sla
 
 from ..errors import InputError, check_int, check_range
 from .balance import observation
-from .epmc import TWO_PI, Epmc, EpmcCondensed, make_problem
+from .epmc import TWO_PI, Epmc, make_problem
+from .epmc_condensed import EpmcCondensed
 from .fourier import Fourier
 from .nlmode_branch import POINT_ARRAYS, NlModeBranch
 from .system import System

@@ -303,7 +303,6 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
     return [sec_bb, sec_syn]
 
 
-
 def fidelity_entry(comp, base, ref, out: str | Path):
     """The fidelity ladder's "nonlinear-mode synthesis" entry (a ``fidelity.Setting``).
 
