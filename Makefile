@@ -23,8 +23,8 @@ run: setup
 	$(MPIRUN) $(UPD) study studies/paper_rig.toml --out $(OUT)/paper_rig
 	$(MPIRUN) $(UPD) study studies/paper.toml --out $(OUT)/paper
 
-## the default (fast) test suite
-test: setup
+## the default (fast) test suite, after the lint (ruff check + format --check)
+test: lint
 	$(PY) -m pytest -q -n 2 --dist loadgroup
 
 ## the slow tests (run with the benchmarks)
@@ -34,5 +34,7 @@ test-slow: setup
 bench: setup
 	$(PY) benchmarks/run_all.py --out $(OUT)/bench
 
+## ruff check and ruff format --check: the first step of make test (and so of CI)
 lint: setup
 	$(VENV)/bin/ruff check workbench tests benchmarks
+	$(VENV)/bin/ruff format --check workbench tests benchmarks

@@ -31,6 +31,7 @@ skipped.
 
 from __future__ import annotations
 
+import functools
 import io
 from dataclasses import dataclass
 from pathlib import Path
@@ -77,7 +78,7 @@ class MatrixSet:
                 param, [node, component],
                 "DOF indices (the matrix file has no node labels; give model.dof_map)",
             )
-        lookup = self._lookup()
+        lookup = self._lookup
         try:
             return lookup[(int(node), int(component))]
         except KeyError:
@@ -89,12 +90,10 @@ class MatrixSet:
             )
             raise InputError(param, [node, component], allowed) from None
 
+    @functools.cached_property
     def _lookup(self) -> dict[Label, int]:
-        cache = self.__dict__.get("_lookup_cache")
-        if cache is None:
-            cache = {lab: i for i, lab in enumerate(self.labels or ())}
-            object.__setattr__(self, "_lookup_cache", cache)
-        return cache
+        """(node, component) -> row, built on first use (cached_property: no field is set)."""
+        return {lab: i for i, lab in enumerate(self.labels or ())}
 
 
 _COMPONENTS_ALLOWED = "a component 1-6 or one of UX UY UZ ROTX ROTY ROTZ"

@@ -25,7 +25,9 @@ Example:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--damper", required=True, metavar="{cone,cylinder,wedge}",
+    from ..geometry.shapes import names
+
+    parser.add_argument("--damper", required=True, metavar="{" + ",".join(names()) + "}",
                         help="damper shape")
     parser.add_argument("--size", type=num, metavar="MM", default=None,
                         help="global element size of the rig, mm (default: [rig.mesh] size_mm)")

@@ -53,9 +53,10 @@ def run(args: argparse.Namespace, ctx) -> dict:
     from ..errors import InputError
     from ..io import write_json
     from ..log import mpi_rank
+    from ..post.screen_table import table
     from ..post.tables import write_rows_csv
     from ..studies.runner import _comm
-    from ..studies.screening import run_screen, table
+    from ..studies.screening import run_screen
     from ..studies.spec import cli_values, load_study
 
     spec = load_study(args.file, cli_values(args))

@@ -1,4 +1,4 @@
-"""gmsh builders for the blade rig and the cone, cylinder and wedge dampers.
+"""gmsh builders for the blade rig and the dampers (cone, cylinder, wedge: :mod:`.shapes`).
 
 ``build_geometry(damper, out_dir, ...)`` resolves the parameters
 (``geometry/*.toml``), seats the damper in the groove and checks that it
@@ -16,8 +16,17 @@ from typing import Any
 
 from .build import build_geometry, code_version, geometry_digest
 from .layout import Layout, make_layout
-from .params import DAMPERS, GeometryParams, load_geometry_params
+from .params import GeometryParams, load_geometry_params
 from .records import BuiltGeometry, ContactSet
+
+
+def __getattr__(name: str) -> Any:
+    """``DAMPERS``: the names of the registered damper shapes (:mod:`.shapes`), in order."""
+    if name == "DAMPERS":
+        from .shapes import names
+
+        return names()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def read_msh(path: str | Path, comm: Any = None, rank: int = 0) -> Any:

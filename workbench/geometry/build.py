@@ -33,13 +33,16 @@ from .records import BuiltGeometry, ContactSet
 
 log = logging.getLogger(__name__)
 
-_SOURCES = ("build.py", "layout.py", "occ.py", "mshio.py", "params.py", "records.py")
+_SOURCES = ("build.py", "layout.py", "occ.py", "mshio.py", "params.py", "records.py",
+            "seat_tools.py")
 MATCH_TOL_M = 1e-9  # a contact point must be a vertex of both meshes to this distance
 
 
 def code_version() -> str:
     """Package version plus a hash of this sub-package's sources (the cache key's code part)."""
-    return _code_version(Path(__file__).resolve().parent, _SOURCES)
+    here = Path(__file__).resolve().parent
+    shapes = tuple(f"shapes/{p.name}" for p in sorted((here / "shapes").glob("*.py")))
+    return _code_version(here, _SOURCES + shapes)
 
 
 def geometry_digest(gp: GeometryParams) -> str:
@@ -59,7 +62,7 @@ def build_geometry(
 
     Parameters
     ----------
-    damper : "cone", "cylinder" or "wedge".
+    damper : a registered shape (:mod:`.shapes`): "cone", "cylinder", "wedge", ...
     out_dir : folder for the meshes and ``geometry.h5`` (created).
     geometry_file : a TOML overriding any table of the defaults
         ([rig...], [cone], [cylinder], [wedge]).

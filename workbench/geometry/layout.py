@@ -35,7 +35,8 @@ and the unit vector ``down[k]`` in the plane, away from the ridge
 its slope distance ``sigma = (p - ridge) . down[k]`` and its ``y``; the
 inclined face spans ``s_tip <= sigma <= s_root``.
 
-Seating (tangent to both planes, DESIGN.md section 4):
+Seating (tangent to both planes, DESIGN.md section 4; each shape's own
+``seat`` in :mod:`.shapes`, e.g. :mod:`.shapes.cone`):
 
 * cylinder: axis on x = 0 at ``z_ridge - R / sin beta``; contact generators
   at ``c - R n[k]``;
@@ -62,7 +63,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
-from .params import ConeParams, CylinderParams, GeometryParams, RigParams, WedgeParams
+from .params import GeometryParams, RigParams
+from .seat_tools import SAME_MM as _SAME_MM
+from .seat_tools import check_step as _step
+from .seat_tools import fit_error as _fit_error
+from .shapes import get as get_shape
 
 # Element-count guard: a size that would give more tetrahedra than this is
 # refused before gmsh runs (gmsh needs about 1 kB per tetrahedron and minutes).
@@ -127,20 +132,6 @@ class Layout:
         """Signed distance of point(s) ``p`` from plane ``k`` (positive on the damper side), mm."""
         ridge = np.array([0.0, 0.0, self.z_ridge])
         return (np.asarray(p, dtype=float) - ridge) @ self.normals[k]
-
-
-def _cone_large(name: str, pl: dict, l_hi: float, r2_hi: float) -> tuple[str, float, str]:
-    """The parameter to blame when the cone's large end does not fit: its length, or, when
-    even the small radius is too large for any length, ``cone.r1_mm``."""
-    if l_hi <= 0.0:
-        return ("cone.r1_mm", pl["r1"], f"cone.r1_mm < {r2_hi:.4g} mm (the large radius "
-                f"R2 = R1 + L tan(alpha_c) must stay <= {r2_hi:.4g} mm)")
-    return (name, pl["length"],
-            f"{name} <= {l_hi:.4g} mm (large radius R2 <= {r2_hi:.4g} mm)")
-
-
-def _fit_error(param: str, value: float, allowed: str, why: str) -> InputError:
-    return InputError(param, value, allowed, why)
 
 
 def _rig(rig: RigParams) -> dict:
@@ -227,19 +218,6 @@ def _rig(rig: RigParams) -> dict:
     )
 
 
-# Two faces closer than this are the same face to the CAD kernel (its
-# tolerance is 1e-7 mm): a step below it is "no step".
-_SAME_MM = 1e-6
-
-
-def _step(param: str, value: float, step: float, f: float, what: str) -> None:
-    """A step between faces is absent (below _SAME_MM) or at least ``f``; else InputError."""
-    if _SAME_MM <= abs(step) < f:
-        raise _fit_error(
-            param, value, f"a value that leaves no step or a step of at least "
-            f"rig.fit.min_feature_mm = {f:g} mm", f"{what} would be {abs(step):.3g} mm")
-
-
 def _check_features(rig: RigParams) -> None:
     """Refuse slivers: steps between rig faces that are neither absent nor >= min_feature_mm."""
     f = rig.fit.min_feature_mm
@@ -269,152 +247,11 @@ def _frames(t1: np.ndarray, n: np.ndarray) -> np.ndarray:
     return np.stack([t1, t2, n], axis=1)
 
 
-def _voronoi_1d(x: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Length of each sorted point's nearest-point cell within [lo, hi]."""
-    mids = 0.5 * (x[1:] + x[:-1])
-    edges = np.concatenate([[lo], mids, [hi]])
-    return np.diff(edges)
-
-
-def _seat_cylinder(p: CylinderParams, g: dict) -> dict:
-    beta, R, L, n = g["beta"], p.radius_mm, p.length_mm, p.n_contact_points
-    sb = math.sin(beta)
-    zc = g["z_ridge"] - R / sb
-    c = np.array([0.0, 0.0, zc])
-    y = -L / 2 + (np.arange(n) + 0.5) * L / n
-    pts, t1s, ns, side = [], [], [], []
-    for k in range(2):
-        foot = c - R * g["normals"][k]
-        pts.append(foot[None, :] + y[:, None] * np.array([0.0, 1.0, 0.0]))
-        t1s.append(np.tile([0.0, 1.0, 0.0], (n, 1)))
-        ns.append(np.tile(g["normals"][k], (n, 1)))
-        side.append(np.full(n, k))
-    ends = [(c - R * g["normals"][k]) + s * np.array([0.0, L / 2, 0.0])
-            for k in range(2) for s in (-1.0, 1.0)]
-    return dict(
-        placement=dict(kind="cylinder", center=c, axis=np.array([0.0, 1.0, 0.0]), radius=R,
-                       length=L, y0=-L / 2),
-        points=np.vstack(pts), t1=np.vstack(t1s), n=np.vstack(ns), side=np.concatenate(side),
-        weight=np.full(2 * n, L / n), kind="line", extent=L, line_ends=np.array(ends),
-        volume=math.pi * R * R * L, centroid=c.copy(),
-        x_extent=R, z_min=zc - R,
-        notes=dict(contact_line_length_mm=L),
-    )
-
-
-def _seat_cone(p: ConeParams, g: dict, rig: RigParams) -> dict:
-    beta = g["beta"]
-    ac = math.radians(p.semi_angle_deg)
-    if ac >= beta:
-        raise InputError(
-            "cone.semi_angle_deg", p.semi_angle_deg,
-            f"0 < cone.semi_angle_deg < rig.platform.angle_deg = {rig.platform.angle_deg:g} deg",
-            "a cone touches both platform planes along generators only if its axis tilts by "
-            "gamma with sin(gamma) = sin(alpha_c) / sin(beta); for alpha_c >= beta that has no "
-            "solution (at alpha_c = beta the cone would stand vertical)")
-    sb, sa, ca = math.sin(beta), math.sin(ac), math.cos(ac)
-    gamma = math.asin(sa / sb)
-    cg, sg = math.cos(gamma), math.sin(gamma)
-    R1, L, n = p.r1_mm, p.length_mm, p.n_contact_points
-    R2 = R1 + L * math.tan(ac)
-    a = np.array([0.0, -cg, -sg])  # unit axis, apex -> large end
-    s1, s2 = R1 / sa, R2 / sa  # slant distances apex -> small / large end
-    sm = 0.5 * (s1 + s2)
-    apex = np.array([0.0, sm * cg / ca, g["z_ridge"]])  # contact lines centred on y = 0
-    h1, h2 = R1 / math.tan(ac), R2 / math.tan(ac)
-    c1, c2 = apex + h1 * a, apex + h2 * a  # small-end and large-end centres
-    s = s2 - (np.arange(n) + 0.5) * (s2 - s1) / n  # large end -> small end
-    pts, t1s, ns, side, ends = [], [], [], [], []
-    for k in range(2):
-        gen = (a - sa * g["normals"][k]) / ca  # unit generator in plane k, from the apex
-        pts.append(apex[None, :] + s[:, None] * gen[None, :])
-        t1s.append(np.tile(-gen, (n, 1)))
-        ns.append(np.tile(g["normals"][k], (n, 1)))
-        side.append(np.full(n, k))
-        ends += [apex + s1 * gen, apex + s2 * gen]
-    ell = s2 - s1  # = L / cos(alpha_c)
-    vol = math.pi * L / 3.0 * (R1 * R1 + R1 * R2 + R2 * R2)
-    zbar = L * (R1 * R1 + 2 * R1 * R2 + 3 * R2 * R2) / (4 * (R1 * R1 + R1 * R2 + R2 * R2))
-    centroid = c1 + zbar * a  # measured from the small end toward the large end
-    z_min = min(c1[2] - R1 * cg, c2[2] - R2 * cg)
-    return dict(
-        placement=dict(kind="cone", apex=apex, axis=a, r1=R1, r2=R2, c1=c1, c2=c2,
-                       gamma=gamma, semi_angle=ac, length=L),
-        points=np.vstack(pts), t1=np.vstack(t1s), n=np.vstack(ns), side=np.concatenate(side),
-        weight=np.full(2 * n, ell / n), kind="line", extent=ell, line_ends=np.array(ends),
-        volume=vol, centroid=centroid, x_extent=R2, z_min=z_min,
-        notes=dict(gamma_deg=math.degrees(gamma), r2_mm=R2, contact_line_length_mm=ell),
-    )
-
-
-def _seat_wedge(p: WedgeParams, g: dict) -> dict:
-    beta = g["beta"]
-    sb = math.sin(beta)
-    L, ny, ns_rows = p.length_mm, p.n_contact_per_row, p.n_contact_rows
-    s_a = (p.top_width_mm / 2) / sb
-    s_b = s_a + p.face_width_mm
-    ridge = np.array([0.0, 0.0, g["z_ridge"]])
-    up1 = ridge + s_a * g["down"][0]
-    lo1 = ridge + s_b * g["down"][0]
-    skirt = p.skirt_height_mm if p.skirt_height_mm >= _SAME_MM else 0.0
-    z_bot = lo1[2] - skirt
-    # section polygon in the x-z plane, counter-clockwise seen from +y... order is irrelevant
-    poly = np.array([
-        [up1[0], up1[2]], [lo1[0], lo1[2]], [lo1[0], z_bot],
-        [-lo1[0], z_bot], [-lo1[0], lo1[2]], [-up1[0], up1[2]],
-    ])
-    if skirt == 0.0:
-        poly = np.delete(poly, [2, 3], axis=0)
-    f = g["min_feature"]
-    _step("wedge.skirt_height_mm", p.skirt_height_mm, p.skirt_height_mm, f,
-          "the height of the wedge's vertical sides")
-    if p.face_width_mm < f:
-        raise _fit_error("wedge.face_width_mm", p.face_width_mm,
-                         f"wedge.face_width_mm >= rig.fit.min_feature_mm = {f:g} mm",
-                         "the contact faces would be slivers")
-    h = p.face_width_mm / ns_rows
-    rows_s = s_b - (np.arange(ns_rows) + 0.5) * h  # row 0 lowest, up the slope
-    full_y = -L / 2 + (np.arange(ny) + 0.5) * L / ny
-    short_y = -L / 2 + (np.arange(1, ny)) * L / ny
-    pts, t1s, ns, side, weight = [], [], [], [], []
-    for k in range(2):
-        for j, sj in enumerate(rows_s):
-            ys = full_y if j % 2 == 0 else short_y
-            w = _voronoi_1d(ys, -L / 2, L / 2) * h
-            base_pt = ridge + sj * g["down"][k]
-            pts.append(base_pt[None, :] + ys[:, None] * np.array([0.0, 1.0, 0.0]))
-            t1s.append(np.tile([0.0, 1.0, 0.0], (len(ys), 1)))
-            ns.append(np.tile(g["normals"][k], (len(ys), 1)))
-            side.append(np.full(len(ys), k))
-            weight.append(w)
-    x, z = poly[:, 0], poly[:, 1]
-    xs, zs = np.roll(x, -1), np.roll(z, -1)
-    cross = x * zs - xs * z
-    area = 0.5 * cross.sum()
-    cx = ((x + xs) * cross).sum() / (6 * area)
-    cz = ((z + zs) * cross).sum() / (6 * area)
-    ends = []
-    for k in range(2):
-        for s_ in (s_a, s_b):
-            for yy in (-L / 2, L / 2):
-                ends.append(ridge + s_ * g["down"][k] + np.array([0.0, yy, 0.0]))
-    return dict(
-        placement=dict(kind="wedge", section_xz=poly, y0=-L / 2, length=L, s_a=s_a, s_b=s_b),
-        points=np.vstack(pts), t1=np.vstack(t1s), n=np.vstack(ns), side=np.concatenate(side),
-        weight=np.concatenate(weight), kind="face", extent=p.face_width_mm * L,
-        line_ends=np.array(ends),
-        volume=abs(area) * L, centroid=np.array([cx, 0.0, cz]),
-        x_extent=float(np.abs(poly[:, 0]).max()), z_min=float(poly[:, 1].min()),
-        notes=dict(contact_face_area_mm2=p.face_width_mm * L,
-                   points_per_face=int(sum(ny if j % 2 == 0 else ny - 1 for j in range(ns_rows)))),
-    )
-
-
 def _check_fit(gp: GeometryParams, g: dict, seat: dict) -> None:
     """Refuse a damper whose contacts run off the platform faces or that hits the rig."""
-    rig, fit, d = gp.rig, gp.rig.fit, gp.damper
+    rig, fit = gp.rig, gp.rig.fit
+    shape = get_shape(gp.damper)
     m, clr = fit.edge_margin_mm, fit.clearance_mm
-    sb, cb = math.sin(g["beta"]), math.cos(g["beta"])
     ridge = np.array([0.0, 0.0, g["z_ridge"]])
     ends = seat["line_ends"]
     sig = np.array([(e - ridge) @ g["down"][0 if e[0] < 0 else 1] for e in ends])
@@ -422,28 +259,7 @@ def _check_fit(gp: GeometryParams, g: dict, seat: dict) -> None:
     half_w = rig.platform.width_mm / 2 - m
     where = ("the contact lines" if seat["kind"] == "line" else "the contact faces")
     pl = seat["placement"]
-    if seat["kind"] == "line" and d == "cylinder":
-        r_lo, r_hi = lo_ok * sb / cb, hi_ok * sb / cb
-        rng = f"{r_lo:.4g} <= cylinder.radius_mm <= {r_hi:.4g} mm"
-        small, large = ("cylinder.radius_mm", pl["radius"], rng), ("cylinder.radius_mm",
-                                                                  pl["radius"], rng)
-        long_ = ("cylinder.length_mm", pl["length"], f"cylinder.length_mm <= {2 * half_w:.4g} mm")
-    elif d == "cone":
-        ca = math.cos(pl["semi_angle"])
-        r1_lo = lo_ok * ca * sb / cb
-        r2_hi = hi_ok * ca * sb / cb
-        l_hi = (r2_hi - pl["r1"]) / math.tan(pl["semi_angle"])
-        small = ("cone.r1_mm", pl["r1"], f"cone.r1_mm >= {r1_lo:.4g} mm")
-        large = _cone_large("cone.length_mm", pl, l_hi, r2_hi)
-        cg = math.cos(pl["gamma"])
-        long_ = ("cone.length_mm", pl["length"],
-                 f"cone.length_mm <= {2 * half_w * ca * ca / cg:.4g} mm")
-    else:
-        small = ("wedge.top_width_mm", gp.shape.top_width_mm,
-                 f"wedge.top_width_mm >= {2 * lo_ok * sb:.4g} mm")
-        large = ("wedge.face_width_mm", gp.shape.face_width_mm,
-                 f"wedge.face_width_mm <= {hi_ok - pl['s_a']:.4g} mm")
-        long_ = ("wedge.length_mm", pl["length"], f"wedge.length_mm <= {2 * half_w:.4g} mm")
+    small, large, long_ = shape.fit_blame(gp, g, pl, lo_ok, hi_ok, half_w)
     face = (f"the inclined platform faces span {g['s_tip']:.4g} to {g['s_root']:.4g} mm down "
             f"the slope from the ridge; rig.fit.edge_margin_mm = {m:g} mm")
     if sig.min() < lo_ok - 1e-9:
@@ -458,16 +274,9 @@ def _check_fit(gp: GeometryParams, g: dict, seat: dict) -> None:
                          f"{rig.platform.width_mm:g} mm less the edge margin")
     x_max = g["half_gap"] - clr
     if seat["x_extent"] > x_max + 1e-9:
-        if d == "cylinder":
-            hit = ("cylinder.radius_mm", pl["radius"], f"cylinder.radius_mm <= {x_max:.4g} mm")
-        elif d == "cone":
-            l_hi = (x_max - pl["r1"]) / math.tan(pl["semi_angle"])
-            hit = _cone_large("cone.length_mm", pl, l_hi, x_max)
-        else:
-            hit = ("wedge.face_width_mm", gp.shape.face_width_mm,
-                   f"wedge.face_width_mm <= {max(x_max / sb - pl['s_a'], 0.0):.4g} mm")
         raise _fit_error(
-            *hit, f"the damper would reach x = +-{seat['x_extent']:.4g} mm and hit the blades "
+            *shape.hit_blame(gp, g, pl, x_max),
+            f"the damper would reach x = +-{seat['x_extent']:.4g} mm and hit the blades "
             f"(inner faces at +-{g['half_gap']:.4g} mm, clearance rig.fit.clearance_mm = "
             f"{clr:g} mm)")
     if seat["z_min"] < g["z_base"] + clr - 1e-9:
@@ -522,12 +331,7 @@ def refinement_tets(h_c: float, h: float, dist: float) -> float:
 def make_layout(gp: GeometryParams) -> Layout:
     """Seat the chosen damper in the groove of the rig; raise InputError if it does not fit."""
     g = _rig(gp.rig)
-    if gp.damper == "cone":
-        seat = _seat_cone(gp.shape, g, gp.rig)
-    elif gp.damper == "cylinder":
-        seat = _seat_cylinder(gp.shape, g)
-    else:
-        seat = _seat_wedge(gp.shape, g)
+    seat = get_shape(gp.damper).seat(gp.shape, g, gp.rig)
     _check_fit(gp, g, seat)
     pts = seat["points"]
     from scipy.spatial import cKDTree

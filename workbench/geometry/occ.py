@@ -112,7 +112,7 @@ def _plane_faces(gmsh, normal: np.ndarray, point: np.ndarray) -> list[int]:
     return out
 
 
-def _face_containing(gmsh, normal: np.ndarray, pts: np.ndarray, what: str) -> int:
+def face_containing(gmsh, normal: np.ndarray, pts: np.ndarray, what: str) -> int:
     """The one planar surface that contains all ``pts`` (bounding-box test)."""
     pts = np.atleast_2d(pts)
     for s in _plane_faces(gmsh, normal, pts[0]):
@@ -124,7 +124,7 @@ def _face_containing(gmsh, normal: np.ndarray, pts: np.ndarray, what: str) -> in
     raise MeshingError(f"internal: no CAD face found for {what}")
 
 
-def _embed_points(gmsh, pts: np.ndarray, surface: int) -> list[int]:
+def embed_points(gmsh, pts: np.ndarray, surface: int) -> list[int]:
     occ = gmsh.model.occ
     tags = [occ.addPoint(*map(float, p)) for p in pts]
     occ.synchronize()
@@ -217,22 +217,22 @@ def build_rig(gmsh: Any, lay: Layout, path: Path) -> None:
     if not all(len(v) == 1 for v in vols.values()):
         raise MeshingError(f"internal: the rig CAD has volumes {vols}, expected one of each")
     members: dict[str, list[int]] = {k: v for k, v in vols.items()}
-    members["clamped"] = [_face_containing(gmsh, np.array([0.0, 0.0, 1.0]),
+    members["clamped"] = [face_containing(gmsh, np.array([0.0, 0.0, 1.0]),
                                            np.array([[0.0, 0.0, 0.0]]), "the clamped face")]
     point_tags: list[int] = []
     for k in range(2):
         pts = lay.points[lay.side == k]
-        face = _face_containing(gmsh, lay.normals[k], pts, f"the contact face of blade {k + 1}")
+        face = face_containing(gmsh, lay.normals[k], pts, f"the contact face of blade {k + 1}")
         members[f"contact_face_{k + 1}"] = [face]
-        tags = _embed_points(gmsh, pts, face)
+        tags = embed_points(gmsh, pts, face)
         members[f"contact_nodes_{k + 1}"] = tags
         point_tags += tags
     for name, pts in (("excitation", lay.excitation), ("response", lay.response)):
         members[name] = []
         for k in range(2):
-            face = _face_containing(gmsh, np.array([1.0, 0.0, 0.0]), pts[k],
+            face = face_containing(gmsh, np.array([1.0, 0.0, 0.0]), pts[k],
                                     f"the {name} point of blade {k + 1}")
-            members[name] += _embed_points(gmsh, pts[k:k + 1], face)
+            members[name] += embed_points(gmsh, pts[k:k + 1], face)
     _groups(gmsh, "rig", members)
     ms = lay.params.rig.mesh
     h_c = min(ms.contact_size_mm, lay.contact_spacing, ms.size_mm)
@@ -264,51 +264,36 @@ def _rotate_seam_down(gmsh, vol: int, origin: np.ndarray, axis: np.ndarray) -> N
         occ.synchronize()
 
 
+def embed_on_lateral_face(gmsh: Any, lay: Layout, vol: int, origin: np.ndarray,
+                          axis: np.ndarray, lateral_type: str, members: dict[str, list[int]],
+                          point_tags: list[int]) -> None:
+    """A solid of revolution just added (``vol``): turn its seam down and embed each side's
+    contact points in its one lateral face (gmsh type ``lateral_type``: "Cone", "Cylinder")."""
+    gmsh.model.occ.synchronize()
+    _rotate_seam_down(gmsh, vol, origin, axis)
+    lateral = [s for _, s in gmsh.model.getEntities(2)
+               if gmsh.model.getType(2, s) == lateral_type]
+    if len(lateral) != 1:
+        raise MeshingError(f"internal: the damper has {len(lateral)} {lateral_type} faces")
+    for k in range(2):
+        tags = embed_points(gmsh, lay.points[lay.side == k], lateral[0])
+        members[f"contact_nodes_{k + 1}"] = tags
+        point_tags += tags
+
+
 def build_damper(gmsh: Any, lay: Layout, path: Path) -> None:
-    """Draw, mesh and write the damper with the contact points embedded in its surface."""
-    occ = gmsh.model.occ
+    """Draw, mesh and write the damper with the contact points embedded in its surface.
+
+    The shape's own ``draw`` (:mod:`workbench.geometry.shapes`) makes the
+    solid and embeds the points; the groups, sizes and meshing are common.
+    """
+    from .shapes import get as get_shape
+
     gmsh.model.add("damper")
     pl = lay.damper
     members: dict[str, list[int]] = {}
     point_tags: list[int] = []
-    if pl["kind"] in ("cone", "cylinder"):
-        if pl["kind"] == "cone":
-            c1, c2 = pl["c1"], pl["c2"]
-            vol = occ.addCone(*map(float, c2), *map(float, c1 - c2), pl["r2"], pl["r1"])
-            origin, axis = c2, -pl["axis"]
-            lateral_type = "Cone"
-        else:
-            c = pl["center"]
-            vol = occ.addCylinder(0.0, pl["y0"], float(c[2]), 0.0, pl["length"], 0.0,
-                                  pl["radius"])
-            origin, axis = np.array([0.0, pl["y0"], c[2]]), np.array([0.0, 1.0, 0.0])
-            lateral_type = "Cylinder"
-        occ.synchronize()
-        _rotate_seam_down(gmsh, vol, origin, axis)
-        lateral = [s for _, s in gmsh.model.getEntities(2)
-                   if gmsh.model.getType(2, s) == lateral_type]
-        if len(lateral) != 1:
-            raise MeshingError(f"internal: the damper has {len(lateral)} {lateral_type} faces")
-        for k in range(2):
-            tags = _embed_points(gmsh, lay.points[lay.side == k], lateral[0])
-            members[f"contact_nodes_{k + 1}"] = tags
-            point_tags += tags
-    else:
-        sec = pl["section_xz"]
-        corners = [occ.addPoint(float(x), pl["y0"], float(z)) for x, z in sec]
-        lines = [occ.addLine(corners[i], corners[(i + 1) % len(corners)])
-                 for i in range(len(corners))]
-        face = occ.addPlaneSurface([occ.addCurveLoop(lines)])
-        ext = occ.extrude([(2, face)], 0.0, pl["length"], 0.0)
-        occ.synchronize()
-        vol = [t for d, t in ext if d == 3][0]
-        for k in range(2):
-            pts = lay.points[lay.side == k]
-            f = _face_containing(gmsh, lay.normals[k], pts, f"wedge contact face {k + 1}")
-            members[f"contact_face_{k + 1}"] = [f]
-            tags = _embed_points(gmsh, pts, f)
-            members[f"contact_nodes_{k + 1}"] = tags
-            point_tags += tags
+    vol = get_shape(lay.params.damper).draw(gmsh, lay, members, point_tags)
     members["damper"] = [vol]
     _groups(gmsh, "damper", members)
     ms = lay.params.rig.mesh

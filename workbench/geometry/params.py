@@ -1,15 +1,16 @@
 """Parameters of the rig and the dampers, read from ``geometry/*.toml``.
 
 Every dimension is a named field with its unit in the key (``_mm``, ``_deg``).
-The defaults below mirror the files ``geometry/rig.toml``, ``cone.toml``,
-``cylinder.toml`` and ``wedge.toml`` (a test keeps the two in step); the
+The rig's records below mirror ``geometry/rig.toml``; each damper shape's
+record lives in its module (``workbench/geometry/shapes/<name>.py``) and
+mirrors ``geometry/<name>.toml`` (a test keeps each pair in step); the
 files are what a user edits and they explain the choices.
 
 Layering (later wins), all through :func:`workbench.config.load_record`, so
 an unknown key is refused with a hint and a value out of range names itself::
 
     defaults (geometry/rig.toml + geometry/<damper>.toml)
-    <- the user's geometry file (any of the tables [rig...], [cone], [cylinder], [wedge])
+    <- the user's geometry file (any of the tables [rig...] and [<damper>])
     <- ``overrides`` (a nested dict with the same keys, used by studies)
     <- ``size_mm`` (the global mesh size, ``upd mesh --size``)
 """
@@ -24,10 +25,12 @@ from pathlib import Path
 from typing import Any
 
 from ..config import load_record, param, read_toml, record_to_dict
-from ..errors import InputError, check_choice, check_range, did_you_mean
+from ..errors import InputError, check_range, did_you_mean
+from .shapes import all_shapes
+from .shapes import get as get_shape
+from .shapes import names as shape_names
 
 DEFAULT_DIR = Path(__file__).resolve().parents[2] / "geometry"
-DAMPERS = ("cone", "cylinder", "wedge")
 
 
 # --- rig -------------------------------------------------------------------
@@ -158,54 +161,22 @@ class RigParams:
     fit: Fit = field(default_factory=Fit)
 
 
-# --- dampers ---------------------------------------------------------------
+# --- dampers: each shape's record lives in its module (workbench/geometry/shapes/) ---------
 
 
-@dataclass(frozen=True)
-class ConeParams:
-    """Conical damper: a frustum whose axis tilts by gamma in the y-z plane."""
+def __getattr__(name: str) -> Any:
+    """``DAMPERS``, ``DAMPER_RECORDS`` and the shapes' records (``ConeParams``, ...), from the
+    registry of shapes (looked up on use, so a new shape module is found without edits)."""
+    from .shapes import all_shapes
 
-    semi_angle_deg: float = param(
-        10.0, "cone semi-angle alpha_c (must be below the platform angle), deg",
-        lo=0.0, hi=75.0, lo_open=True)
-    r1_mm: float = param(10.0, "radius of the small end R1, mm", lo=0.0, lo_open=True)
-    length_mm: float = param(
-        40.0, "length L along the cone axis (R2 = R1 + L tan alpha_c), mm", lo=0.0, lo_open=True)
-    n_contact_points: int = param(23, "contact points per contact line", lo=2, hi=400)
-
-
-@dataclass(frozen=True)
-class CylinderParams:
-    """Cylindrical damper, axis along y."""
-
-    radius_mm: float = param(13.5265, "radius R, mm", lo=0.0, lo_open=True)
-    length_mm: float = param(40.0, "length L along y, mm", lo=0.0, lo_open=True)
-    n_contact_points: int = param(23, "contact points per contact line", lo=2, hi=400)
-
-
-@dataclass(frozen=True)
-class WedgeParams:
-    """Wedge damper: a prism along y whose two upper faces lie on the platform planes."""
-
-    length_mm: float = param(40.0, "length along y, mm", lo=0.0, lo_open=True)
-    top_width_mm: float = param(
-        12.0, "width (along x) of the flat top between the two contact faces, mm",
-        lo=0.0, lo_open=True)
-    face_width_mm: float = param(
-        10.0, "width of each contact face measured down its slope, mm", lo=0.0, lo_open=True)
-    skirt_height_mm: float = param(
-        4.0, "height of the vertical sides below the contact faces, mm", lo=0.0)
-    n_contact_rows: int = param(5, "rows of contact points up each face's slope", lo=2, hi=100)
-    n_contact_per_row: int = param(
-        15, "contact points in a full row along y (rows alternate n and n - 1: staggered)",
-        lo=2, hi=200)
-
-
-DAMPER_RECORDS: dict[str, type] = {
-    "cone": ConeParams, "cylinder": CylinderParams, "wedge": WedgeParams,
-}
-
-DamperParams = ConeParams | CylinderParams | WedgeParams
+    if name == "DAMPERS":
+        return tuple(s.name for s in all_shapes())
+    if name == "DAMPER_RECORDS":
+        return {s.name: s.params for s in all_shapes()}
+    for s in all_shapes():
+        if s.params.__name__ == name:
+            return s.params
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 @dataclass(frozen=True)
@@ -214,7 +185,7 @@ class GeometryParams:
 
     damper: str
     rig: RigParams
-    shape: DamperParams
+    shape: Any  # the damper shape's params record (workbench.geometry.shapes)
 
     def as_dict(self) -> dict[str, Any]:
         """Nested plain dict in file units: ``{"rig": {...}, "<damper>": {...}}``."""
@@ -238,7 +209,7 @@ def _merge(base: dict[str, Any], top: Mapping[str, Any]) -> dict[str, Any]:
 def _check_tables(data: Mapping[str, Any], source: str) -> None:
     # [contact] of a rig file holds the contact parameters calibrated with that rig; it is
     # read by workbench.assembly.params.load_contact_params, not by the geometry
-    allowed = ("rig", *DAMPERS, "contact")
+    allowed = ("rig", *shape_names(), "contact")
     for key, value in data.items():
         if key not in allowed:
             raise InputError(
@@ -266,7 +237,8 @@ def load_geometry_params(
     of range; the geometric checks (does the damper fit?) are done later by
     :func:`workbench.geometry.layout.make_layout`.
     """
-    damper = check_choice("damper", damper, DAMPERS)
+    shape_type = get_shape(damper)
+    damper = shape_type.name
     data: dict[str, Any] = {}
     for path in default_files(damper):
         raw = read_toml(path)
@@ -286,10 +258,10 @@ def load_geometry_params(
         data = _merge(data, {"rig": {"mesh": {"size_mm": size}}})
     rig = load_record(RigParams, data.get("rig", {}), "rig.")
     # the other dampers' tables are checked too, so a typo there is not silently kept
-    for other in DAMPERS:
-        if other != damper and other in data:
-            load_record(DAMPER_RECORDS[other], data[other], f"{other}.")
-    shape = load_record(DAMPER_RECORDS[damper], data.get(damper, {}), f"{damper}.")
+    for other in all_shapes():
+        if other.name != damper and other.name in data:
+            load_record(other.params, data[other.name], f"{other.name}.")
+    shape = load_record(shape_type.params, data.get(damper, {}), f"{damper}.")
     return GeometryParams(damper=damper, rig=rig, shape=shape)
 
 

@@ -81,7 +81,7 @@ class BuiltGeometry:
     lie on blade ``k + 1``.
     """
 
-    damper: str  # "cone" | "cylinder" | "wedge"
+    damper: str  # a registered shape's name (workbench.geometry.shapes): "cone", ...
     rig_msh: Path
     damper_msh: Path
     contact: ContactSet

@@ -62,43 +62,13 @@ from ..errors import InputError
 from .aft import AftResult, aft, work_per_cycle
 from .fourier import Fourier
 from .linear import make_linear
+from .loops import loop_dissipation, loop_normal_work
+from .ports import excitation_vector, observation
 from .system import System
 
-
-def observation(system: System, outputs: object) -> np.ndarray:
-    """(n_out, n) observation matrix from a DOF list or a matrix."""
-    n = system.n
-    if outputs is None:
-        return np.eye(n)
-    if sp.issparse(outputs):
-        O = outputs.toarray()
-    else:
-        O = np.asarray(outputs)
-    if (
-        O.ndim == 2
-        and O.shape[1] == n
-        and O.dtype != object
-        and np.issubdtype(O.dtype, np.floating)
-    ):
-        return O.astype(float)
-    idx = np.atleast_1d(O)
-    if idx.ndim != 1 or not np.all(np.equal(np.mod(idx, 1), 0)):
-        raise InputError("outputs", outputs, f"a list of DOF indices or an (n_out, {n}) matrix")
-    idx = idx.astype(int)
-    bad = (idx < 0) | (idx >= n)
-    if bad.any():
-        raise InputError("outputs", int(idx[bad][0]), f"a DOF index 0 <= i < {n}")
-    O = np.zeros((idx.size, n))
-    O[np.arange(idx.size), idx] = 1.0
-    return O
-
-
-def excitation_vector(system: System, f1: object) -> np.ndarray:
-    """(n,) complex harmonic-1 force per unit level (N): ``f(t) = level Re(f1 exp(i w t))``."""
-    a = np.asarray(f1, dtype=complex).ravel()
-    if a.shape != (system.n,) or not np.all(np.isfinite(a)):
-        raise InputError("f1", f"shape {a.shape}", f"{system.n} finite complex amplitudes (N)")
-    return a
+# observation, excitation_vector (ports.py) and the loop work (loops.py) stay importable here
+__all__ = ["Evaluation", "HarmonicBalance", "HillParts", "PointData", "excitation_vector",
+           "loop_dissipation", "loop_normal_work", "observation"]
 
 
 @dataclass
@@ -619,23 +589,3 @@ class HarmonicBalance:
         return 2 * nh * nz, op
 
 
-def loop_normal_work(u: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """(n_el,) work per cycle (J) of the normal force on its loop, trapezoid rule.
-
-    The unilateral spring is conservative: zero for a resolved loop; where the
-    contact opens between samples the trapezoid misses the kink.
-    """
-    du = np.roll(u[:, :, 2], -1, axis=1) - u[:, :, 2]
-    favg = 0.5 * (f[:, :, 2] + np.roll(f[:, :, 2], -1, axis=1))
-    return np.einsum("et,et->e", favg, du)
-
-
-def loop_dissipation(u: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """(n_el,) energy per cycle (J) of the tangential forces on their converged loops.
-
-    ``u``, ``f`` (n_el, nt, 3): displacement and force samples of one period
-    (the period closes: sample nt is sample 0). Trapezoid rule on the loop.
-    """
-    du = np.roll(u[:, :, :2], -1, axis=1) - u[:, :, :2]
-    favg = 0.5 * (f[:, :, :2] + np.roll(f[:, :, :2], -1, axis=1))
-    return np.einsum("etk,etk->e", favg, du)

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, check_range
-from .nlmodes import NlModeBranch
+from .nlmode_branch import NlModeBranch
 
 TWO_PI = 2.0 * np.pi
 

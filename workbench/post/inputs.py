@@ -12,6 +12,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ..geometry.shapes import all_shapes
+from ..geometry.shapes import get as get_shape
+from ..geometry.shapes import names as shape_names
+
 ROOT = Path(__file__).resolve().parents[2]
 
 UNITS: dict[str, str] = {
@@ -39,7 +43,6 @@ KIND_OPTIONS: dict[str, tuple[str, ...]] = {
     "robustness": ("name", "kind", "methods", "hard-cases", "peak-tolerance", "time-check",
                    "response-blade", "band-margin", *_MODEL, *_SOLVE),
 }
-_LINE = ("cone", "cylinder")
 
 
 def _rel(p: Path | str) -> str:
@@ -71,18 +74,20 @@ def used_inputs(values: dict[str, Any], sources: dict[str, str] | None = None,
     names = KIND_OPTIONS.get(kind, KIND_OPTIONS["comparison"])
     dampers = list(values.get("dampers") or [])
     if kind == "robustness":
-        from ..studies.robustness import CASES
+        from ..study_options import CASES
 
         dampers = sorted({CASES[n].damper for n in values.get("hard-cases") or [] if n in CASES})
-    has_line = any(d in _LINE for d in dampers)
-    has_face = "wedge" in dampers
+    shapes = [get_shape(d) for d in dampers if d in shape_names()]
     skip = set()
-    if not has_line:
-        skip |= {"kt-line", "kn-line", "points-per-line", "levels-points-per-line"}
-    if not has_face:
+    if not any(sh.contact == "line" for sh in shapes):
+        skip |= {"kt-line", "kn-line"}
+    if not any(sh.contact == "face" for sh in shapes):
         skip |= {"kt-face", "kn-face"}
-    if "cone" not in dampers:
-        skip.add("cone-angle")
+    # a study option that reaches a shape's parameters (points-per-line, cone-angle, ...)
+    # is shown when one of the dampers has it
+    for option in {o for sh in all_shapes() for o in sh.study_options}:
+        if not any(option in sh.study_options for sh in shapes):
+            skip |= {option, f"levels-{option}"}
 
     contact_file = _rel(DEFAULT_FILE) if DEFAULT_FILE.is_file() else "ContactParams defaults"
     cp: ContactParams = load_contact_params()
@@ -92,6 +97,7 @@ def used_inputs(values: dict[str, Any], sources: dict[str, str] | None = None,
     geo_file = values.get("geometry")
     sweep = values.get("sweep") if kind == "sweep" else None
 
+    shape_options = {o for sh in all_shapes() for o in sh.study_options}
     rows = []
     for name in names:
         if name in skip:
@@ -103,7 +109,7 @@ def used_inputs(values: dict[str, Any], sources: dict[str, str] | None = None,
             src = f"swept ({_origin(sources.get('sweep-values', 'default'))})"
         elif v is None and name in contact_default:
             v, src = contact_default[name], f"default: {contact_file}"
-        elif v is None and name in ("mesh-size", "points-per-line", "cone-angle"):
+        elif v is None and (name == "mesh-size" or name in shape_options):
             v, src = _geometry_default(name, dampers, geo_file)
         elif v is None and name == "nt":
             from ..hbm.fourier import default_nt
@@ -126,12 +132,12 @@ def _geometry_default(name: str, dampers: list[str], geo_file: Any) -> tuple[Any
 
     vals = {}
     for d in dampers:
-        if name == "points-per-line" and d not in _LINE or name == "cone-angle" and d != "cone":
+        own = get_shape(d).study_options if d in shape_names() else {}
+        if name != "mesh-size" and name not in own:
             continue
         gp = load_geometry_params(d, geo_file)
         vals[d] = (gp.rig.mesh.size_mm if name == "mesh-size" else
-                   gp.shape.n_contact_points if name == "points-per-line" else
-                   gp.shape.semi_angle_deg)
+                   getattr(gp.shape, own[name][0]))
     files = ["geometry/rig.toml"] if name == "mesh-size" else [
         f"geometry/{d}.toml" for d in vals]
     src = "default: " + (f"{_rel(geo_file)} over " if geo_file else "") + ", ".join(files)

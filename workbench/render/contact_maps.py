@@ -34,7 +34,7 @@ from ..errors import InputError
 from ..io import atomic_path
 from ..post.results import STATUS_NAMES, CaseResult
 from .common import offscreen_pyvista
-from .study_figures import STATUS_COLORS
+from .study_style import STATUS_COLORS
 
 log = logging.getLogger(__name__)
 

@@ -21,12 +21,13 @@ from __future__ import annotations
 
 import math
 import re
+import weakref
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from .common import pyplot, save_figure, styled
-from .study_figures import _EXTRA_COLORS, FIGSIZE, force_colors
+from .study_style import _EXTRA_COLORS, FIGSIZE, force_colors
 
 ERR_FLOOR = 1e-4  # percent
 QUANTITY_TITLES = {"peak_amplitude_mm": "peak amplitude",
@@ -42,6 +43,7 @@ KNOB_MARKERS = {"mesh-size": "o", "modes": "s", "harmonics": "^", "nt": "v",
 
 EDGE_Y = 0.035  # axes fraction of the bottom band of errors below the floor
 EDGE_TEXT = f"< {ERR_FLOOR:g} % (reference: 0)"
+_EDGE_LABELLED: weakref.WeakSet = weakref.WeakSet()  # axes whose bottom band is labelled
 
 
 def _floor(e: float | None) -> tuple[float | None, bool]:
@@ -59,10 +61,10 @@ def _edge(ax, xs: Sequence[float], **kw) -> None:
 
     tr = blended_transform_factory(ax.transData, ax.transAxes)
     ax.plot(list(xs), [EDGE_Y] * len(xs), ls="none", transform=tr, clip_on=False, **kw)
-    if not getattr(ax, "_edge_labelled", False):
+    if ax not in _EDGE_LABELLED:
         ax.text(0.01, 2.2 * EDGE_Y, EDGE_TEXT, transform=ax.transAxes, fontsize=6.5,
                 color="0.35", va="bottom")
-        ax._edge_labelled = True
+        _EDGE_LABELLED.add(ax)
 
 
 def _log_axes(ax) -> None:
@@ -151,8 +153,8 @@ def plot_knob(knob: str, levels: Sequence[str], times_s: Sequence[float],
 
 
 def pareto_indices(times: Sequence[float], errs: Sequence[float | None]) -> list[int]:
-    """Non-dominated (time, error) points, cheapest first (see studies.fidelity.pareto_front)."""
-    from ..studies.fidelity import pareto_front
+    """Non-dominated (time, error) points, cheapest first (see post.pareto.pareto_front)."""
+    from ..post.pareto import pareto_front
 
     return pareto_front(list(zip(times, errs, strict=True)))
 

@@ -40,20 +40,18 @@ the figures it appears in say so, and why.
 Re-running on the same folder rewrites the figures and tables and deletes
 those of its own file names (:data:`OWN_PREFIXES`, :data:`OWN_TABLE_PREFIXES`)
 that the new run did not make, so the folder matches the report; other
-files are never touched.
+files are never touched. The sweep sections are in :mod:`.sweep_sections`,
+the builder that collects sections, figures and tables in
+:mod:`.section_builder`.
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import WorkbenchError
-from ..log import progress
-from ..post.results import CaseResult, StudyResults, family_name
+from ..post.results import StudyResults, family_name
 from ..post.tables import (
     Table,
     base_variant,
@@ -62,138 +60,34 @@ from ..post.tables import (
     energy_table,
     families,
     peak_amplitude_table,
-    peak_curve,
     peak_frequency_table,
     pick_forces,
     slug,
     status_shares_table,
-    sweep_curves,
-    sweep_table,
 )
 from . import study_figures as sf
+from .section_builder import (
+    FIGURES,
+    OWN_PREFIXES,
+    OWN_TABLE_PREFIXES,
+    TABLES,
+    _Builder,
+    _failures,
+    _fam_slug,
+    _forces_text,
+    _Job,
+    _peak_sentence,
+    _Section,
+)
+from .sweep_sections import _sweep
 
 log = logging.getLogger(__name__)
 
-FIGURES, TABLES = "figures", "tables"
-# figure file names this module writes (anything else in figures/ is shown as found)
-OWN_PREFIXES = ("receptance_", "peak_amplitude_", "friction_energy_", "status_map_",
-                "status_shares_", "contact_", "sweep_")
-OWN_TABLE_PREFIXES = ("peak_amplitude_", "peak_frequency_", "friction_energy_",
-                      "status_shares_", "sweep_", "cases.", "screen.")
 MODES_PREFIX = "modes_"
 # also what workbench.render.modes.render_modes names its files, if written into figures/
 MODEL_PREFIX = "model_"
 MODE_FILE_PREFIXES = (MODEL_PREFIX, "first_bending", MODES_PREFIX, "mode_")
 _LINE_WORDS = {"-": "solid", "--": "dashed", ":": "dotted", "-.": "dash-dot"}
-
-
-@dataclass
-class _Section:
-    id: str
-    title: str
-    text: list[str] = field(default_factory=list)
-    figures: list[dict[str, str]] = field(default_factory=list)
-    tables: list[dict[str, str]] = field(default_factory=list)
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"id": self.id, "title": self.title, "text": self.text,
-                "figures": self.figures, "tables": self.tables}
-
-
-@dataclass
-class _Job:
-    """One figure to draw: ``run()`` writes the PNG(s) the section entries point to."""
-
-    run: Callable[[], Any]
-    section: _Section
-    entries: list[dict[str, str]]
-    optional: bool = False  # a WorkbenchError drops the entries instead of failing
-
-
-class _Builder:
-    def __init__(self, results: StudyResults, study_dir: Path):
-        self.results = results
-        self.root = Path(study_dir)
-        self.fig_dir = self.root / FIGURES
-        self.tab_dir = self.root / TABLES
-        self.sections: list[_Section] = []
-        self.jobs: list[_Job] = []
-        self.written: set[str] = set()  # table file names written by this run
-
-    def section(self, id_: str, title: str, text: Sequence[str] = ()) -> _Section:
-        s = _Section(id_, title, list(text))
-        self.sections.append(s)
-        return s
-
-    def figure(self, sec: _Section, name: str, caption: str,
-               draw: Callable[[Path], Any]) -> None:
-        path = self.fig_dir / f"{name}.png"
-        entry = {"path": f"{FIGURES}/{name}.png", "caption": caption}
-        sec.figures.append(entry)
-        self.jobs.append(_Job(lambda: draw(path), sec, [entry]))
-
-    def table(self, sec: _Section, name: str, table: Table, caption: str) -> None:
-        for path in table.write(self.tab_dir / name):
-            self.written.add(path.name)
-        sec.tables.append({"path": f"{TABLES}/{name}.csv",
-                           "caption": f"{caption} (also as markdown: {TABLES}/{name}.md)"})
-
-    def run(self) -> None:
-        for job in progress(self.jobs, desc="study figures", total=len(self.jobs), unit="fig"):
-            try:
-                job.run()
-            except WorkbenchError as e:
-                if not job.optional:
-                    raise
-                for entry in job.entries:
-                    job.section.figures.remove(entry)
-                job.section.text.append(f"A picture could not be drawn: {e}")
-                log.warning("figure skipped: %s", e)
-
-    def remove_stale(self) -> None:
-        """Delete figures and tables of ours left by an earlier run and not made by this one,
-        so the folder holds exactly what the report shows."""
-        shown = {Path(f["path"]).name for s in self.sections for f in s.figures}
-        for p in self.fig_dir.glob("*.png"):
-            if p.name.startswith(OWN_PREFIXES) and p.name not in shown:
-                log.debug("removing stale %s", p)
-                p.unlink()
-        for p in [*self.tab_dir.glob("*.csv"), *self.tab_dir.glob("*.md")]:
-            if p.name.startswith(OWN_TABLE_PREFIXES) and p.name not in self.written:
-                log.debug("removing stale %s", p)
-                p.unlink()
-
-
-# ---- helpers --------------------------------------------------------------------------
-
-
-def _fam_slug(phase_deg: float) -> str:
-    return slug(family_name(phase_deg))
-
-
-def _failures(cases: Sequence[CaseResult]) -> str:
-    notes = sf.failure_notes(cases)
-    return (" " + " ".join(notes)) if notes else ""
-
-
-def _forces_text(forces: Sequence[float]) -> str:
-    return ", ".join(f"{f:g}" for f in sorted(forces)) + " N"
-
-
-def _peak_sentence(cases: Sequence[CaseResult]) -> str:
-    """'cone: peak 0.0135 mm at 392.1 Hz (0.096 N) to 0.156 mm at 358.2 Hz (30 N)'."""
-    pc = peak_curve(cases)
-    ok = [k for k in range(pc.force_n.size) if pc.amp_mm[k] == pc.amp_mm[k]]
-    if not ok:
-        return f"{pc.damper}: no point computed"
-    a, b = ok[0], ok[-1]
-    first = f"{pc.amp_mm[a]:.3g} mm at {pc.freq_hz[a]:.1f} Hz ({pc.force_n[a]:g} N)"
-    if a == b:
-        return f"{pc.damper}: peak {first}"
-    last = f"{pc.amp_mm[b]:.3g} mm at {pc.freq_hz[b]:.1f} Hz ({pc.force_n[b]:g} N)"
-    ratio = (pc.amp_mm[b] / pc.force_n[b]) / (pc.amp_mm[a] / pc.force_n[a])
-    return (f"{pc.damper}: peak {first} to {last}; peak receptance at the highest force over "
-            f"that at the lowest {ratio:.3g} (1 for a linear response)")
 
 
 # ---- comparison -----------------------------------------------------------------------
@@ -338,94 +232,9 @@ def _contact_maps(b: _Builder, variant: str, geometry_dirs: dict[str, Path]) -> 
 # ---- sweeps ---------------------------------------------------------------------------
 
 
-def _cone_design(results: StudyResults, geometry_dirs: dict[str, Path]) -> tuple[float, ...]:
-    """(beta deg, R1 mm, L mm) of the cone: its geometry folder, else the geometry files."""
-    gdir = geometry_dirs.get("cone")
-    if gdir is not None and (Path(gdir) / "geometry.h5").is_file():
-        from ..geometry.records import BuiltGeometry
-
-        prm = BuiltGeometry.load(Path(gdir) / "geometry.h5").params
-        return (float(prm["rig"]["platform"]["angle_deg"]), float(prm["cone"]["r1_mm"]),
-                float(prm["cone"]["length_mm"]))
-    from ..geometry.params import load_geometry_params
-
-    gp = load_geometry_params("cone", results.inputs.get("geometry") or None)
-    return gp.rig.platform.angle_deg, gp.shape.r1_mm, gp.shape.length_mm
-
-
-def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
-    r = b.results
-    name, unit = sf.option_label(option)
-    curves = sweep_curves(r, option)
-    values = sorted({v for sc in curves for v in sc.value.tolist()})
-    sec = b.section(f"sweep-{slug(option)}", f"Sweep of {name}",
-                    [f"Resonance of each damper and family as {name} ({option}) takes the "
-                     f"values {', '.join(f'{v:g}' for v in values)} {unit}".rstrip()
-                     + f"; forces {_forces_text(r.forces)}."])
-    osl = slug(option)
-    b.figure(sec, f"sweep_{osl}",
-             f"Peak response amplitude (mm, top) and resonance frequency (Hz, bottom) vs "
-             f"{name} ({unit}); one column per family, one curve per damper."
-             + _failures(r.cases),
-             lambda path: sf.plot_sweep(r.cases, option, path))
-    b.table(sec, f"sweep_{osl}", sweep_table(curves),
-            f"Sweep of {option}: resonance of every damper, family and force")
-    if option.replace("_", "-") == "cone-angle" and any(c.damper.startswith("cone")
-                                                        for c in r.cases):
-        beta, r1, length = _cone_design(r, geometry_dirs)
-        cones = [c for c in r.cases if c.damper.startswith("cone")]
-        b.figure(sec, f"sweep_{osl}_energy_slip",
-                 "Cone: friction energy per cycle at resonance (mJ) vs cone semi-angle (deg), "
-                 "above the largest kinematic slip per unit in-phase radial platform motion "
-                 f"from the paper's eq. 6 and the exact 3-D rigid-body kinematics (beta = "
-                 f"{beta:g} deg, R1 = {r1:g} mm, L = {length:g} mm)." + _failures(cones),
-                 lambda path: sf.plot_cone_angle_energy(cones, path, beta_deg=beta,
-                                                        r1_mm=r1, length_mm=length,
-                                                        option=option))
-    screen_rows = r.extras.get("screen") or []
-    if screen_rows and len(r.forces) >= 2:
-        from .screen_figures import design_rule_points, plot_design_rule
-
-        pts = design_rule_points(r.cases, screen_rows)
-        if pts:
-            b.figure(sec, f"sweep_{osl}_design_rule",
-                     f"The design rule across the {name} sweep: nonlinear peak growth "
-                     f"A({pts[0]['f_top_n']:g} N)/A({pts[0]['f_ref_n']:g} N) (filled) and "
-                     "the coupling screen's prediction (open) against k2/k (left); friction "
-                     "energy per cycle at the largest force against k2/k (middle); the "
-                     "nonlinear growth against the screen's saturation force over the "
-                     "largest force (right, log). A case whose curve stopped before its peak "
-                     "is left out (no marker)." + _failures(r.cases),
-                     lambda path: plot_design_rule(pts, path))
-            b.table(sec, f"sweep_{osl}_design_rule", Table(
-                ("damper", "family", option, "k2/k", "rig bound k2/k",
-                 "levels off up to (N)", "screen growth", "nonlinear growth",
-                 f"energy at {pts[0]['f_top_n']:g} N (mJ)"),
-                tuple((p["damper"], p["family"], p["variant"].split("=", 1)[-1],
-                       f"{p['k2_over_k']:.3f}",
-                       "-" if p["bound_k2_over_k"] is None else f"{p['bound_k2_over_k']:.3f}",
-                       "never" if p["f_cap_n"] is None else f"{p['f_cap_n']:.3g}",
-                       "-" if p["growth"] is None else f"{p['growth']:.2f}",
-                       "not reached" if p["growth_nl"] is None else f"{p['growth_nl']:.2f}",
-                       "not reached" if p["energy_mj"] is None else f"{p['energy_mj']:.3g}")
-                      for p in pts)),
-                f"The design rule across the {option} sweep: screen against harmonic balance")
-    rec = b.section(f"sweep-{slug(option)}-receptances", f"Receptances across the {name} sweep")
-    for p in families(r):
-        for d in r.dampers:
-            for f in r.forces:
-                own = r.select(damper=d, phase_deg=p, force_n=f)
-                if not own:
-                    continue
-                b.figure(rec, f"sweep_{osl}_receptance_{_fam_slug(p)}_{slug(d)}_{f:g}N",
-                         f"{d} damper, {family_name(p)}, F = {f:g} N: receptance (mm/N) for "
-                         f"every value of {option}." + _failures(own),
-                         lambda path, cs=own: sf.plot_sweep_receptances(cs, option, path))
-
-
 def _screen(b: _Builder, rows: list[dict[str, Any]]) -> None:
     """The linear coupling screen of every model (workbench.assembly.screen)."""
-    from ..studies.screening import table as screen_table
+    from ..post.screen_table import table as screen_table
 
     head, body = screen_table(rows)
     f_max = rows[0].get("f_max_n")

@@ -1,6 +1,6 @@
 """Figures of the uncertainty study: distributions, exceedance, Sobol tornado, scatter, schedule.
 
-Plain inputs: the design (:class:`workbench.studies.uncertainty.Design`),
+Plain inputs: the design (:class:`workbench.post.uncertainty.Design`),
 the per (damper, phase) outputs and the analysis dict of
 :func:`workbench.studies.uncertainty.analyse`. One PNG per function, fixed
 size, no time stamp. Dampers keep one colour throughout.
@@ -202,7 +202,7 @@ def plot_scatter(design, results: dict[tuple, dict], analysis: dict[str, Any],
 
 
 def _input_label(name: str) -> str:
-    from ..studies.uncertainty import INPUT_LABELS
+    from ..post.uncertainty import INPUT_LABELS
 
     return INPUT_LABELS.get(name, name)
 

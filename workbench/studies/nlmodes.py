@@ -303,7 +303,6 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
     return [sec_bb, sec_syn]
 
 
-
 def fidelity_entry(comp, base, ref, out: str | Path):
     """The fidelity ladder's "nonlinear-mode synthesis" entry (a ``fidelity.Setting``).
 
@@ -318,7 +317,7 @@ def fidelity_entry(comp, base, ref, out: str | Path):
     """
     from ..hbm.nlmodes import NlModeBranch
     from ..hbm.synthesis import synthesize
-    from .fidelity import QUANTITIES, Setting, condition_name
+    from ..post.fidelity import QUANTITIES, Setting, condition_name
     from .runner import prepare_model
 
     out = Path(out)

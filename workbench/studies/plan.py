@@ -8,6 +8,7 @@ options). Cases sharing a model part share the meshing and the reduction.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 from dataclasses import dataclass, field
@@ -54,6 +55,10 @@ class Case:
                 **{k: self.settings[k] for k in SOLVE_KEYS}}
 
 
+NLMODE_SOURCES = ("nlmodes.py", "epmc.py", "epmc_condensed.py", "nlmode_branch.py",
+                  "synthesis.py")
+
+
 def solver_code_version() -> str:
     """A hash of the sources that turn a reduced model into a case's curve.
 
@@ -65,9 +70,9 @@ def solver_code_version() -> str:
 
     root = Path(__file__).resolve().parents[1]
     parts = [code_version(root / pkg) for pkg in ("contact", "assembly")]
-    # the nonlinear modes (hbm/nlmodes.py, hbm/synthesis.py) do not shape a forced response
+    # the nonlinear modes (NLMODE_SOURCES) do not shape a forced response
     hbm = tuple(p.name for p in sorted((root / "hbm").glob("*.py"))
-                if p.name not in ("nlmodes.py", "synthesis.py"))
+                if p.name not in NLMODE_SOURCES)
     parts.insert(1, code_version(root / "hbm", hbm))
     parts.append(code_version(root / "studies", ("plan.py", "runner.py")))
     return digest(parts, 12)
@@ -101,10 +106,8 @@ def make_case(damper: str, phase: float, force: float, settings: dict[str, Any],
               variant: str = "") -> Case:
     c = Case(damper, float(phase), float(force), dict(settings), variant)
     md = digest(c.model_params())
-    object.__setattr__(c, "model_digest", md)
-    object.__setattr__(c, "digest", digest({"model": md, "solve": c.solve_params(),
-                                            "code": _SOLVER_CODE()}))
-    return c
+    return dataclasses.replace(c, model_digest=md, digest=digest(
+        {"model": md, "solve": c.solve_params(), "code": _SOLVER_CODE()}))
 
 
 @functools.lru_cache(maxsize=1)

@@ -1,7 +1,8 @@
 """Robustness study: solution methods crossed with hard cases, a map of success and failure.
 
 A *method* is a named variant of :class:`~workbench.hbm.options.SolverOptions`
-(:data:`METHODS`; the first method of a study is the reference, normally
+(:data:`METHODS`, named in :mod:`workbench.study_options`; the first method
+of a study is the reference, normally
 ``default``: the options every other study uses). A *hard case* is one
 frequency response of the assembled rig + damper model that stresses the
 solver (:data:`CASES`: preload near separation, a high ``kt / (mu N0)``
@@ -31,224 +32,49 @@ solution is compared with a time integration started on it
 models of :data:`TIME_MODELS`, not on the rig models of 300-900 DOFs; the
 78-DOF synthetic line-damper rig of :mod:`workbench.hbm.examples` fits, but
 with light damping its time integration does not become periodic within a
-few hundred periods, minutes each, so it is not part of the check).
+few hundred periods, minutes each, so it is not part of the check). That
+check lives in :mod:`.robustness_time`, a cell's solve and verdict in
+:mod:`.robustness_cells`, the report text in
+:mod:`workbench.render.robustness_report`.
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ..errors import InputError, SolveError
-from ..io import digest, write_json
+from ..io import write_json
 from ..post.tables import write_rows_csv
-from .runner import write_manifest_and_report
-from .spec import ROBUSTNESS_CASES, ROBUSTNESS_METHODS, StudySpec
+from ..study_options import CASES, METHODS, HardCase
+from .outputs import write_manifest_and_report
+from .robustness_cells import (
+    ENERGY_TOL,
+    STATUSES,
+    Problem,
+    _cell_key,
+    classify,
+    method_options,
+    run_cell,
+)
+from .robustness_time import (
+    TIME_MODELS,
+    TimeModel,
+    branch_amplitudes_at,
+    compare_with_branch,
+    suspect_points,
+    time_check,
+    time_checks,
+    turning_points,
+)
+from .spec import StudySpec
 
 log = logging.getLogger(__name__)
 
-# name -> (SolverOptions overrides, description); the study options list the same names
-METHODS: dict[str, tuple[dict[str, Any], str]] = {
-    "default": ({}, "analytic Jacobian, bt line search, arc length, secant predictor, "
-                    "adaptive step (the options of every other study)"),
-    "fd-jacobian": ({"jacobian": "fd"}, "finite-difference Jacobian (dense, column by column)"),
-    "ls-basic": ({"line_search": "basic"}, "full Newton steps (SNES line search basic)"),
-    "ls-l2": ({"line_search": "l2"}, "SNES line search l2"),
-    "ls-cp": ({"line_search": "cp"}, "SNES line search cp (critical point)"),
-    "tangent-predictor": ({"predictor": "tangent"}, "tangent predictor instead of secant"),
-    "constant-predictor": ({"predictor": "constant"},
-                           "constant predictor (Newton starts at the last point)"),
-    "fixed-step": ({"ds0": 0.01, "ds_min": 0.01, "ds_max": 0.01, "max_points": 3000},
-                   "a fixed small arc-length step 0.01, never adapted (no halving on failure; "
-                   "a budget of 3000 points instead of the study's max-points)"),
-    "frequency-stepping": ({"continuation": "frequency"},
-                           "plain frequency stepping (adaptive), no arc length"),
-}
 
-
-@dataclass(frozen=True)
-class HardCase:
-    """One hard case: a damper, a phase, a force and the study options it changes."""
-
-    damper: str
-    phase_deg: float
-    force_n: float
-    settings: dict[str, Any]
-    why: str
-
-
-CASES: dict[str, HardCase] = {
-    "near-separation": HardCase(
-        "cone", 0.0, 9.6, {"cf": 1000.0},
-        "in-phase cone, centrifugal load 1 kN (a tenth of the default): the preload N0 is "
-        "small against the dynamic normal load, the pairs open for part of the period"),
-    "high-kt-ratio": HardCase(
-        "cone", 180.0, 9.6, {"kt-line": 6.0e11, "mu": 0.1},
-        "out-of-phase cone, tangential stiffness x10 and friction coefficient / 5: "
-        "kt / (mu N0) is 50 times the default, the slip displacement 50 times smaller"),
-    "high-force": HardCase(
-        "cone", 180.0, 60.0, {},
-        "out-of-phase cone at 60 N, twice the paper's highest level (gross slip)"),
-    "wedge-in-phase": HardCase(
-        "wedge", 0.0, 30.0, {},
-        "in-phase wedge at 30 N: the faces separate (partly) around the peak"),
-    "turning-point": HardCase(
-        "cone", 0.0, 30.0, {"damping": 5e-4},
-        "in-phase cone at 30 N with damping 0.05 %: the curve folds (softening with "
-        "separation) in a narrow frequency range, so plain frequency stepping must jump"),
-    "light-damping": HardCase(
-        "cone", 180.0, 9.6, {"damping": 1e-4},
-        "out-of-phase cone with modal damping 0.01 %: a sharp, friction-dominated peak"),
-}
-
-assert tuple(METHODS) == ROBUSTNESS_METHODS and tuple(CASES) == ROBUSTNESS_CASES
-
-STATUSES = ("ok", "wrong", "failed")
-# a point whose energy balance (work of the excitation against the dissipated work per cycle)
-# is off by more than this is not a periodic solution: the branch is a wrong answer
-ENERGY_TOL = 1e-4
-
-
-# ---- problems and cells ---------------------------------------------------------------------
-
-@dataclass
-class Problem:
-    """A frequency response to compute with every method (built lazily, as it may need a model).
-
-    ``build()`` returns ``(system, f1, band_hz, outputs, output_names)``; ``key``
-    identifies everything that shapes the answer except the solver options.
-    """
-
-    name: str
-    key: str
-    level: float
-    harmonics: tuple[int, ...]
-    nt: int | None
-    build: Callable[[], tuple[Any, np.ndarray, tuple[float, float], Any, tuple[str, ...]]]
-    base_options: dict[str, Any] = field(default_factory=dict)
-    info: dict[str, Any] = field(default_factory=dict)
-    _built: Any = None
-
-    def get(self):
-        if self._built is None:
-            self._built = self.build()
-        return self._built
-
-
-def method_options(name: str, base: dict[str, Any] | None = None):
-    """The SolverOptions of method ``name`` (over the ``base`` fields)."""
-    from ..hbm.options import SolverOptions
-
-    if name not in METHODS:
-        raise InputError("methods", name, "one of " + ", ".join(METHODS))
-    return SolverOptions(**{**(base or {}), **METHODS[name][0]})
-
-
-def turning_points(freq_hz: np.ndarray) -> np.ndarray:
-    """Indices of the points where the frequency increment along the branch changes sign."""
-    f = np.asarray(freq_hz, dtype=float)
-    if f.size < 3:
-        return np.zeros(0, dtype=int)
-    df = np.diff(f)
-    keep = np.flatnonzero(np.abs(df) > 1e-9 * max(np.abs(f).max(), 1.0))
-    s = np.sign(df[keep])
-    flips = np.flatnonzero(s[1:] != s[:-1])
-    return keep[flips + 1]  # the point where the new direction starts
-
-
-def _cell_key(problem: Problem, method: str) -> str:
-    opts = method_options(method, problem.base_options)
-    from ..config import record_to_dict
-    from .plan import _SOLVER_CODE
-
-    return digest({"problem": problem.key, "method": method, "options": record_to_dict(opts),
-                   "code": _SOLVER_CODE()})
-
-
-def run_cell(problem: Problem, method: str) -> dict[str, Any]:
-    """Solve ``problem`` with ``method``; never raises for a failed solve."""
-    from ..hbm.continuation import frequency_response
-
-    opts = method_options(method, problem.base_options)
-    system, f1, band, outputs, names = problem.get()
-    t0 = time.perf_counter()
-    branch, error = None, ""
-    try:
-        branch = frequency_response(system, f1, problem.level, band, outputs=outputs,
-                                    harmonics=problem.harmonics, nt=problem.nt, options=opts,
-                                    output_names=names, label=f"{problem.name} / {method}")
-    except (SolveError, RuntimeError, ArithmeticError, np.linalg.LinAlgError) as e:
-        # a method that crashes has failed: say how, do not stop the study
-        log.warning("%s / %s raised %s: %s", problem.name, method, type(e).__name__, e)
-        error = f"raised {type(e).__name__}: {e}"
-    wall = time.perf_counter() - t0
-    rec: dict[str, Any] = {"case": problem.name, "method": method, "wall_s": wall,
-                           "band_hz": [float(band[0]), float(band[1])]}
-    if branch is None:
-        rec.update(failed=True, completed=False, message=error, n_points=0, newton_its=0,
-                   freq_hz=[], amp=[], stable=[])
-    else:
-        s = branch.summary()
-        rec.update(failed=bool(branch.failed), completed=bool(branch.completed),
-                   message=branch.message, n_points=branch.n_points,
-                   newton_its=int(s["newton_its"]),
-                   energy_residual_max=s["energy_residual_max"],
-                   n_unknowns=int(branch.stats.get("n_unknowns", 0)),
-                   n_snes_failed=int(branch.stats.get("n_failed", 0)),
-                   freq_hz=branch.freq_hz.tolist(), amp=branch.out_amp[:, 0].tolist()
-                   if branch.n_points else [], stable=branch.stable.tolist(),
-                   max_status=int(branch.status.max()) if branch.status.size else 0,
-                   separated_share=float(np.mean(branch.status >= 2))
-                   if branch.status.size else 0.0)
-    return _describe(rec)
-
-
-def _describe(rec: dict[str, Any]) -> dict[str, Any]:
-    f = np.asarray(rec["freq_hz"], dtype=float)
-    a = np.asarray(rec["amp"], dtype=float)
-    lo, hi = rec["band_hz"]
-    rec["freq_reached_hz"] = float(f.max()) if f.size else None
-    rec["band_fraction"] = float((f.max() - lo) / (hi - lo)) if f.size else 0.0
-    rec["last_freq_hz"] = float(f[-1]) if f.size else None
-    i = int(np.argmax(a)) if a.size else -1
-    rec["peak_amplitude"] = float(a[i]) if i >= 0 else None
-    rec["peak_frequency_hz"] = float(f[i]) if i >= 0 else None
-    tp = turning_points(f)
-    rec["n_turning_points"] = int(tp.size)
-    rec["turning_points_hz"] = [round(float(f[j]), 4) for j in tp]
-    rec["n_unstable"] = int(np.sum(~np.asarray(rec["stable"], dtype=bool)))
-    rec["succeeded"] = bool(not rec["failed"] and rec["completed"])
-    return rec
-
-
-def classify(cells: list[dict[str, Any]], reference: str, tol_pct: float) -> None:
-    """Set ``status`` and the peak deviations from the reference method, in place."""
-    ref = {c["case"]: c for c in cells if c["method"] == reference}
-    for c in cells:
-        r = ref.get(c["case"])
-        c["amp_dev_pct"] = c["freq_dev_pct"] = None
-        if c["succeeded"] and r is not None and r["succeeded"] and c is not r:
-            lo, hi = c["band_hz"]
-            c["amp_dev_pct"] = 100.0 * (c["peak_amplitude"] - r["peak_amplitude"]) / abs(
-                r["peak_amplitude"])
-            c["freq_dev_pct"] = 100.0 * (c["peak_frequency_hz"] - r["peak_frequency_hz"]) / (
-                hi - lo)
-        er = c.get("energy_residual_max")
-        if not c["succeeded"]:
-            c["status"] = "failed"
-        elif (c["amp_dev_pct"] is not None and abs(c["amp_dev_pct"]) > tol_pct) or (
-                er is not None and er > ENERGY_TOL):
-            c["status"] = "wrong"
-        else:
-            c["status"] = "ok"
-        c["reference"] = c["method"] == reference
-        c["reference_ok"] = bool(r is not None and r["succeeded"])
+# ---- the map of cells (one cell is solved and judged in robustness_cells.py) ----------------
 
 
 def method_map(problems: list[Problem], methods: list[str], cache_dir: Path | None = None,
@@ -333,173 +159,6 @@ def case_problems(spec: StudySpec, out: Path, force: bool = False) -> list[Probl
                   "changes": ", ".join(f"{k} = {v:g}" for k, v in hc.settings.items())
                   or "none"}))
     return problems
-
-
-# ---- harmonic balance against time integration ----------------------------------------------
-
-@dataclass(frozen=True)
-class TimeModel:
-    """A small model (<= 200 DOFs) whose HBM branch is checked by time integration."""
-
-    build: Callable[[], Any]  # -> ExampleModel
-    level: float
-    harmonics: tuple[int, ...]
-    why: str
-    max_periods: int = 2000
-    steps_per_period: int = 1024
-    tol: float = 1e-7  # relative change of the state over a period that counts as periodic
-
-
-def _two_dof():
-    from ..hbm.examples import two_dof_contact
-
-    return two_dof_contact(zeta=0.005)
-
-
-def _sdof_light():
-    from ..hbm.examples import sdof_jenkins
-
-    return sdof_jenkins(zeta=1e-4)
-
-
-TIME_MODELS: dict[str, TimeModel] = {
-    "two-dof-separating": TimeModel(
-        _two_dof, 3.0, tuple(range(6)),
-        "two-DOF 3-D contact example (harmonics 0-5, as its study file), damping 0.5 %, "
-        "level 3 N: separation, turning points and Hill-unstable pieces"),
-    "sdof-light-damping": TimeModel(
-        _sdof_light, 1.0, tuple(range(8)),
-        "single-DOF Jenkins oscillator with damping 0.01 % (the lightest damping)",
-        max_periods=6000, tol=1e-6),
-}
-
-
-def suspect_points(freq_hz, amp, stable, status, max_points: int = 4) -> list[tuple[int, str]]:
-    """Indices of points where the HBM is suspect, with why: peak, turning points, unstable,
-    separation (at most ``max_points``, distinct)."""
-    f = np.asarray(freq_hz)
-    a = np.asarray(amp)
-    st = np.asarray(stable, dtype=bool)
-    out: list[tuple[int, str]] = [(int(np.argmax(a)), "peak")]
-    for j in turning_points(f)[:2]:
-        out.append((int(j), "turning point"))
-    bad = np.flatnonzero(~st)
-    if bad.size:
-        out.append((int(bad[np.argmax(a[bad])]), "Hill-unstable"))
-    stat = np.asarray(status)
-    if stat.size:
-        sep = np.flatnonzero(stat.max(axis=1) >= 2 if stat.ndim == 2 else stat >= 2)
-        sep = sep[st[sep]] if sep.size else sep
-        if sep.size:
-            out.append((int(sep[np.argmax(a[sep])]), "separation"))
-    seen: dict[int, str] = {}
-    for i, why in out:
-        seen[i] = f"{seen[i]}, {why}" if i in seen else why
-    return list(seen.items())[:max_points]
-
-
-def time_check(name: str, tm: TimeModel) -> dict[str, Any]:
-    """HBM branch of a small model and time integrations started on it at its suspect points."""
-    from ..hbm.balance import HarmonicBalance
-    from ..hbm.continuation import frequency_response
-    from ..hbm.fourier import Fourier
-    from ..hbm.options import SolverOptions
-    from ..hbm.timeint import time_response
-
-    ex = tm.build()
-    opts = SolverOptions()
-    t0 = time.perf_counter()
-    b = frequency_response(ex.system, ex.f1, tm.level, ex.band_hz, outputs=ex.outputs,
-                           harmonics=tm.harmonics, options=opts, label=f"time check {name}")
-    hb = HarmonicBalance(ex.system, ex.f1, Fourier(b.harmonics, b.nt), ex.outputs, tm.level,
-                         opts.space, opts.backend, opts.dc_anchor)
-    rows = []
-    for i, why in suspect_points(b.freq_hz, b.out_amp[:, 0], b.stable, b.status):
-        w = 2 * np.pi * b.freq_hz[i]
-        q0, v0 = hb.fourier.state_at(hb.response(b.x[i], w), w)
-        ts = time.perf_counter()
-        try:
-            tr = time_response(ex.system, ex.f1, tm.level, b.freq_hz[i], ex.outputs,
-                               harmonics=tm.harmonics, steps_per_period=tm.steps_per_period,
-                               max_periods=tm.max_periods, tol=tm.tol, q0=q0, v0=v0)
-        except SolveError as e:  # not periodic within max_periods: keep the last period
-            tr = e.partial
-        a_hbm, a_ti = float(b.out_amp[i, 0]), float(tr.amplitude[0])
-        rows.append({
-            "model": name, "point": i, "why": why, "freq_hz": float(b.freq_hz[i]),
-            "hill_stable": bool(b.stable[i]), "hbm_amplitude": a_hbm, "ti_amplitude": a_ti,
-            "diff_pct": 100.0 * (a_ti - a_hbm) / a_hbm,
-            "hbm_h1": float(b.out_h1[i, 0]), "ti_h1": float(tr.h1_amplitude[0]),
-            "ti_periods": int(tr.periods), "ti_converged": bool(tr.converged),
-            "ti_s": time.perf_counter() - ts})
-    return {"model": name, "why": tm.why, "level": tm.level, "n_dofs": ex.system.n,
-            "harmonics": list(tm.harmonics), "failed": bool(b.failed), "message": b.message,
-            "freq_hz": b.freq_hz.tolist(), "amp": b.out_amp[:, 0].tolist(),
-            "stable": b.stable.tolist(), "points": rows, "wall_s": time.perf_counter() - t0}
-
-
-def branch_amplitudes_at(freq_hz, amp, fq: float) -> np.ndarray:
-    """Every amplitude of a branch at frequency ``fq`` (linear between neighbouring points)."""
-    f, a = np.asarray(freq_hz, float), np.asarray(amp, float)
-    out = []
-    for j in range(f.size - 1):
-        d0, d1 = f[j] - fq, f[j + 1] - fq
-        if d0 == 0.0:
-            out.append(a[j])
-        elif d0 * d1 < 0:
-            out.append(a[j] + (a[j + 1] - a[j]) * (fq - f[j]) / (f[j + 1] - f[j]))
-    if f.size and f[-1] == fq:
-        out.append(a[-1])
-    return np.array(out)
-
-
-def compare_with_branch(check: dict[str, Any]) -> None:
-    """Add to each time-integration row the HBM solution nearest to it at its frequency.
-
-    Near a fold several periodic solutions coexist: a time integration started
-    on one may settle on another. ``nearest_hbm_amplitude`` is the branch's
-    amplitude (at that frequency) closest to the time-integration amplitude and
-    ``diff_nearest_pct`` the difference to it.
-    """
-    for r in check["points"]:
-        cands = branch_amplitudes_at(check["freq_hz"], check["amp"], r["freq_hz"])
-        cands = np.append(cands, r["hbm_amplitude"])
-        k = int(np.argmin(np.abs(cands - r["ti_amplitude"])))
-        r["n_hbm_solutions"] = int(len(set(np.round(cands / cands.max(), 6))))
-        r["nearest_hbm_amplitude"] = float(cands[k])
-        r["diff_nearest_pct"] = 100.0 * (r["ti_amplitude"] - cands[k]) / cands[k]
-
-
-def time_checks(cache_dir: Path | None, *, force: bool = False,
-                names: list[str] | None = None) -> list[dict[str, Any]]:
-    """:func:`time_check` of every model of :data:`TIME_MODELS` (cached), with a progress bar."""
-    from ..log import progress
-    from .plan import _SOLVER_CODE
-
-    out = []
-    for name in progress(names or list(TIME_MODELS), "robustness: HBM vs time integration",
-                         unit="model"):
-        tm = TIME_MODELS[name]
-        key = digest({"time-check": name, "level": tm.level, "harmonics": tm.harmonics,
-                      "why": tm.why, "max_periods": tm.max_periods, "tol": tm.tol,
-                      "spp": tm.steps_per_period, "code": _SOLVER_CODE()})
-        path = None if cache_dir is None else cache_dir / f"time-{name}-{key}.json"
-        if path is not None and path.is_file() and not force:
-            import json
-
-            try:
-                rec = json.loads(path.read_text())
-                compare_with_branch(rec)
-                out.append(rec)
-                continue
-            except (OSError, ValueError):
-                pass
-        rec = time_check(name, tm)
-        if path is not None:
-            write_json(path, rec)
-        compare_with_branch(rec)
-        out.append(rec)
-    return out
 
 
 # ---- the study ------------------------------------------------------------------------------
@@ -603,6 +262,15 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     return summary
 
 
+def _sections(spec: StudySpec, cells: list[dict], checks: list[dict],
+              summary: dict) -> list[dict]:
+    """The report's sections (written by :mod:`workbench.render.robustness_report`)."""
+    from ..render.robustness_report import robustness_sections
+
+    return robustness_sections(spec.peak_tolerance, {m: METHODS[m][1] for m in spec.methods},
+                               ENERGY_TOL, cells, checks)
+
+
 def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str, Any]:
     ref = spec.methods[0]
     counts = {m: {s: 0 for s in STATUSES} for m in spec.methods}
@@ -638,88 +306,11 @@ def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str
             "time_check": [{k: v for k, v in r.items()} for ch in checks for r in ch["points"]]}
 
 
-def _sections(spec: StudySpec, cells: list[dict], checks: list[dict],
-              summary: dict) -> list[dict]:
-    tol = spec.peak_tolerance
-    meth = "; ".join(f"{m}: {METHODS[m][1]}" for m in spec.methods)
-    text_map = [
-        "Every hard case (rows of the table of cases) is solved with every method. A cell is "
-        f"'ok' (green) when the branch reached the band end and its peak lies within "
-        f"{tol:g} % of the reference method's ('{spec.methods[0]}') in amplitude (the peak "
-        "frequency's deviation, in per cent of the band width, is in the tables); 'wrong "
-        "answer' (orange) when it reached the band end with a peak further off, or with a "
-        f"point whose energy balance is off by more than {ENERGY_TOL:g} (not a periodic "
-        "solution); 'failed' (red) when the solver stopped before the band end (the "
-        "frequency reached is shown). Cell text: Newton iterations (over the accepted points) "
-        "and wall time (on a shared machine: compare orders of magnitude, not per cents).",
-        "Methods: " + meth + ".",
-    ]
-    failures = []
-    for c in cells:
-        if c["status"] == "failed":
-            failures.append(f"{c['method']} on {c['case']}: {c['message']} (reached "
-                            f"{_f(c['freq_reached_hz'])} Hz, {100 * c['band_fraction']:.0f} % "
-                            f"of the band, {c['n_points']} points kept)")
-        elif c["status"] == "wrong":
-            why = []
-            if c["amp_dev_pct"] is not None and abs(c["amp_dev_pct"]) > tol:
-                why.append(f"its peak is {c['amp_dev_pct']:+.3g} % in amplitude and "
-                           f"{c['freq_dev_pct']:+.3g} % of the band in frequency off the "
-                           "reference's")
-            er = c.get("energy_residual_max")
-            if er is not None and er > ENERGY_TOL:
-                why.append(f"a point's energy balance is off by {er:.2g} (not a solution)")
-            failures.append(f"{c['method']} on {c['case']}: reached the band end but "
-                            + " and ".join(why))
-    sections = [
-        {"id": "map", "title": "Failure map", "text": text_map,
-         "figures": [{"path": "figures/robustness_map.png",
-                      "caption": "Methods x hard cases: green ok, orange wrong answer, red "
-                      "failed; text: Newton iterations, wall time, and the peak deviation or "
-                      "the frequency reached."},
-                     {"path": "figures/robustness_curves.png",
-                      "caption": "Each hard case: the branch of every method (peak response "
-                      "of blade 1 against frequency); a failed branch ends with a cross."}],
-         "tables": [{"path": "tables/robustness_cases.csv",
-                     "caption": "The hard cases (reference method's branch: turning points "
-                     "found as sign changes of the frequency increment, share of "
-                     "separated pair-points, Hill-unstable points)."},
-                    {"path": "tables/robustness_cells.csv", "caption": "Every cell."}]},
-        {"id": "failures", "title": "How the methods failed",
-         "text": failures or ["Every method succeeded on every hard case."],
-         "tables": [{"path": "tables/robustness_failures.csv",
-                     "caption": "Failed cells and wrong answers."}] if failures else []},
-    ]
-    if checks:
-        text = ["The harmonic balance is checked by time integration (Newmark, 1024 steps per "
-                "period, the same contact law) started on the HBM orbit at its suspect points: "
-                "the peak, turning points, a Hill-unstable point and a separated point. The "
-                "dense time integration is limited to 200 DOFs, so this is done on small "
-                "models, not on the rig cases (300-900 DOFs): "
-                + "; ".join(f"{ch['model']} ({ch['n_dofs']} DOFs): {ch['why']}"
-                            for ch in checks) + ".",
-                "A Hill-unstable orbit is expected to be left by the time integration (it "
-                "lands on another, stable orbit): a large difference there confirms Hill's "
-                "verdict. Near a fold several periodic solutions coexist at one frequency, "
-                "and the fold point itself is only marginally stable: a time integration "
-                "started there may settle on another solution of the same branch; the "
-                "table gives the HBM solution nearest to the time integration at that "
-                "frequency and the difference to it. A time integration that does not "
-                "repeat within its period budget is marked as not converged (its last "
-                "period is compared)."]
-        sections.append({"id": "time", "title": "Harmonic balance against time integration",
-                         "text": text,
-                         "figures": [{"path": "figures/hbm_vs_time.png",
-                                      "caption": "HBM branches (unstable: dashed) and the "
-                                      "steady time-integration amplitudes at suspect points."}],
-                         "tables": [{"path": "tables/hbm_vs_time.csv",
-                                     "caption": "HBM against time integration."}]})
-    return sections
-
-
-def _f(v: Any) -> str:
-    return "-" if v is None else f"{v:.5g}"
-
-
 __all__ = ["METHODS", "CASES", "TIME_MODELS", "run_robustness", "method_map", "run_cell",
-           "turning_points", "time_check", "time_checks", "Problem", "method_options"]
+           "turning_points", "time_check", "time_checks", "Problem", "method_options",
+           # moved to studies/robustness_time.py; kept importable from here
+           "TimeModel", "branch_amplitudes_at", "compare_with_branch", "suspect_points",
+           # named in workbench/study_options.py, next to the options that list them
+           "HardCase",
+           # a cell's solve and verdict: studies/robustness_cells.py
+           "ENERGY_TOL", "STATUSES", "classify"]

@@ -1,0 +1,165 @@
+"""The uncertainty study's samples: distributions from the study, one case per design row.
+
+:func:`study_distributions` reads and checks the uncertain inputs'
+distributions; :func:`plan_samples` turns each design row of each damper
+and family into a runner case (its settings the row's absolute values,
+its digest also covering the seat tilt and the imperfection model);
+:func:`prepare_sample` re-makes only what a sample changes on its damper's
+base model (contact values, preloads, damping): nothing is re-meshed or
+re-reduced.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..io import digest
+from ..post.uncertainty import Design, Distribution, parse_distribution
+from .plan import Case, make_case
+from .spec import StudySpec
+
+_VALID = {"mu": (0.0, 2.0), "cf": (0.0, None), "kt": (0.0, None), "kn": (0.0, None),
+          "damping": (0.0, 0.5), "seat-tilt": (-5.0, 5.0)}
+
+
+def study_distributions(spec: StudySpec) -> dict[str, Distribution]:
+    """The distributions of the study's uncertain inputs (``uq-inputs``), checked."""
+    out: dict[str, Distribution] = {}
+    for name in spec.uq_inputs:
+        opt = f"uq-{name}"
+        d = parse_distribution(opt, getattr(spec, opt.replace("-", "_")))
+        lo, hi = d.support
+        vlo, vhi = _VALID[name]
+        if lo < vlo or (vlo == 0.0 and name in ("cf", "kt", "kn") and lo <= 0.0) or \
+                (vhi is not None and hi > vhi):
+            raise InputError(opt, getattr(spec, opt.replace("-", "_")),
+                             f"a distribution within [{vlo:g}, {vhi if vhi is not None else 'inf'}]"
+                             " (give bounds)")
+        out[name] = d
+    if not out:
+        raise InputError("uq-inputs", spec.uq_inputs, "at least one uncertain input")
+    return out
+
+
+@functools.lru_cache(maxsize=1)
+def imperfection_code() -> str:
+    from ..io import code_version
+
+    return code_version(Path(__file__).resolve().parent, ("imperfection.py",))
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One design row of one damper and family: its case and its seat tilt."""
+
+    case: Case
+    row: int
+    tilt_deg: float
+    inputs: dict[str, float]  # the row's values by input name (physical units)
+
+
+def nominal_contact(spec: StudySpec):
+    """The nominal contact parameters: the study's options, else geometry/contact.toml."""
+    from ..assembly.params import load_contact_params
+
+    return load_contact_params(mu=spec.mu, cf_n=spec.cf, kt_line_n_per_m2=spec.kt_line,
+                               kn_line_n_per_m2=spec.kn_line, kt_face_n_per_m3=spec.kt_face,
+                               kn_face_n_per_m3=spec.kn_face)
+
+
+def sample_settings(base: dict[str, Any], nominal, x: dict[str, float]) -> dict[str, Any]:
+    """The study settings of one sample: absolute contact values and damping."""
+    s = dict(base)
+    s["mu"] = float(x.get("mu", nominal.mu))
+    s["cf"] = float(nominal.cf_n * x.get("cf", 1.0))
+    kt, kn = x.get("kt", 1.0), x.get("kn", 1.0)
+    s["kt-line"] = float(nominal.kt_line_n_per_m2 * kt)
+    s["kt-face"] = float(nominal.kt_face_n_per_m3 * kt)
+    s["kn-line"] = float(nominal.kn_line_n_per_m2 * kn)
+    s["kn-face"] = float(nominal.kn_face_n_per_m3 * kn)
+    s["damping"] = float(x.get("damping", base["damping"]))
+    return s
+
+
+def sample_case(damper: str, phase: float, force: float, settings: dict[str, Any],
+                tilt_deg: float, variant: str) -> Case:
+    """A runner case whose digest also covers the seat tilt and the imperfection model."""
+    c = make_case(damper, phase, force, settings, variant)
+    d = c.digest if tilt_deg == 0.0 else digest(
+        {"case": c.digest, "seat_tilt_deg": float(tilt_deg), "model": imperfection_code()})
+    return dataclasses.replace(c, digest=d)
+
+
+# only the study-wide settings that shape a sample's answer enter its case: the
+# uncertainty options themselves do not (a sample's values are in its settings)
+_UQ_OPTIONS = ("uq-inputs", "uq-mu", "uq-cf", "uq-kt", "uq-kn", "uq-damping", "uq-seat-tilt",
+               "uq-samples", "uq-seed", "uq-threshold", "uq-schedule")
+
+
+def base_settings(spec: StudySpec) -> dict[str, Any]:
+    s = spec.as_dict()
+    for k in _UQ_OPTIONS + ("name", "kind", "dampers", "phases", "forces"):
+        s.pop(k, None)
+    return s
+
+
+def plan_samples(spec: StudySpec, design: Design) -> list[Sample]:
+    """Every sample of the study: damper x family x design row, in a stable order."""
+    if len(spec.forces) != 1:
+        raise InputError("forces", spec.forces, "exactly one excitation level, N, for an "
+                         "uncertainty study")
+    nominal = nominal_contact(spec)
+    base = base_settings(spec)
+    force = float(spec.forces[0])
+    out = []
+    for damper in spec.dampers:
+        for phase in spec.phases:
+            for r in range(design.n_rows):
+                x = {k: float(design.values[r, j]) for j, k in enumerate(design.names)}
+                s = sample_settings(base, nominal, x)
+                tilt = float(x.get("seat-tilt", 0.0))
+                s["seat-tilt"] = tilt
+                c = sample_case(damper, phase, force, s, tilt, f"s{r}")
+                out.append(Sample(c, r, tilt, x))
+    return out
+
+
+def prepare_sample(base_prep, case: Case, tilt_deg: float):
+    """The base model of the damper with this sample's contact values, preloads and damping.
+
+    Nothing is re-meshed or re-reduced: ``W``, ``M`` and ``K`` are the base
+    model's. With the nominal values and no tilt this is exactly the model
+    ``runner.prepare_model`` builds for the case.
+    """
+    from ..assembly.model import preloads
+    from ..contact.elements import ContactElements
+    from ..hbm.system import System
+    from .imperfection import open_share, tilted_preloads
+    from .runner import PreparedModel, contact_params_for
+
+    t0 = time.perf_counter()
+    base = base_prep.assembled
+    cp = contact_params_for(case)
+    contact = base.contact
+    kt, kn = cp.pair_stiffness(contact.kind, contact.weight)
+    beta = float(base_prep.geometry.params["rig"]["platform"]["angle_deg"])
+    n0 = preloads(contact, cp.cf_n, cp.mu, beta)
+    n0 = tilted_preloads(contact.points, contact.side, kn, n0, tilt_deg)
+    model = dataclasses.replace(
+        base, mu=np.full(contact.n_pairs, cp.mu), kt=kt, kn=kn, n0=n0,
+        info={**base.info, "total_preload_n": float(n0.sum()),
+              "open_share_at_rest": open_share(n0, contact.side)})
+    contacts = ContactElements(W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt, kn=model.kn,
+                               n0=model.n0)
+    system = System(M=model.M, K=model.K, zeta=case.settings["damping"], contacts=contacts)
+    timings = {"assembly (sample)": time.perf_counter() - t0}
+    return PreparedModel(base_prep.geometry, base_prep.geometry_dir, model, system, {},
+                         timings, cp)

@@ -1,0 +1,154 @@
+"""Spreading independent tasks over MPI ranks: a shared counter, its records, their efficiency.
+
+:func:`run_tasks` hands task indices to whichever rank is free (an MPI
+one-sided ``Fetch_and_op`` on rank 0's window) or round-robin
+(``static``); :func:`schedule_efficiency` and :func:`simulate_schedule`
+measure and model the result. Used by the uncertainty study.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from ..log import progress_bar
+
+
+class WorkCounter:
+    """Hands out task indices 0, 1, 2, ... to whichever rank asks first.
+
+    Under MPI a shared counter in a one-sided window on rank 0
+    (``Fetch_and_op`` under a passive-target lock: rank 0 need not take
+    part while it computes). ``static=True`` deals round-robin instead
+    (rank r gets r, r + P, ...), for comparison. Without MPI it counts.
+    """
+
+    def __init__(self, comm=None, *, static: bool = False):
+        self.comm = comm
+        self.static = static
+        self.rank = 0 if comm is None else comm.rank
+        self.size = 1 if comm is None else comm.size
+        self._next_static = self.rank
+        self._local = 0
+        self.win = None
+        if comm is not None and not static:
+            from mpi4py import MPI
+
+            itemsize = MPI.LONG.Get_size()
+            self.win = MPI.Win.Allocate(itemsize if self.rank == 0 else 0, itemsize,
+                                        comm=comm)
+            if self.rank == 0:
+                buf = np.frombuffer(self.win.tomemory(), dtype=np.int64)
+                buf[0] = 0
+            comm.Barrier()
+
+    def next(self) -> int:
+        if self.static:
+            k = self._next_static
+            self._next_static += self.size
+            return k
+        if self.win is None:
+            k = self._local
+            self._local += 1
+            return k
+        from mpi4py import MPI
+
+        one = np.ones(1, dtype=np.int64)
+        got = np.zeros(1, dtype=np.int64)
+        self.win.Lock(0, MPI.LOCK_SHARED)
+        self.win.Fetch_and_op(one, got, 0, 0, MPI.SUM)
+        self.win.Unlock(0)
+        return int(got[0])
+
+    def free(self) -> None:
+        if self.win is not None:
+            self.win.Free()
+            self.win = None
+
+
+def run_tasks(n_tasks: int, work, comm=None, *, static: bool = False,
+              desc: str = "samples") -> list[dict[str, Any]]:
+    """Run ``work(k)`` for k in 0..n_tasks-1 spread over the ranks; the records of every rank.
+
+    Each record: task ``k``, ``rank``, ``start`` and ``end`` (s since the
+    common start, after a barrier) and what ``work`` returned (a dict).
+    Collective under MPI; every rank gets every record.
+    """
+    counter = WorkCounter(comm, static=static)
+    if comm is not None:
+        comm.Barrier()
+    t0 = time.perf_counter()
+    mine: list[dict[str, Any]] = []
+    with progress_bar(desc, total=n_tasks if counter.size == 1 else None,
+                      unit="case") as bar:
+        while True:
+            k = counter.next()
+            if k >= n_tasks:
+                break
+            ts = time.perf_counter() - t0
+            extra = work(k) or {}
+            mine.append({"k": k, "rank": counter.rank, "start": ts,
+                         "end": time.perf_counter() - t0, **extra})
+            bar.update(1)
+    if comm is not None:
+        comm.Barrier()
+    counter.free()
+    if comm is None:
+        return mine
+    return sorted(sum(comm.allgather(mine), []), key=lambda r: r["k"])
+
+
+def schedule_efficiency(records: list[dict[str, Any]], size: int) -> dict[str, float]:
+    """Busy time, wall time (last end) and efficiency ``busy / (P wall)`` of a run's records."""
+    if not records:
+        return {"busy_s": 0.0, "wall_s": 0.0, "efficiency": float("nan"), "ranks": size}
+    busy = float(sum(r["end"] - r["start"] for r in records))
+    wall = float(max(r["end"] for r in records))
+    per_rank = [float(sum(r["end"] - r["start"] for r in records if r["rank"] == q))
+                for q in range(size)]
+    return {"busy_s": busy, "wall_s": wall, "efficiency": busy / (size * wall) if wall else 1.0,
+            "ranks": size, "busy_per_rank_s": per_rank}
+
+
+def simulate_schedule(costs: list[float], ranks: int, *, static: bool) -> float:
+    """Makespan (s) of tasks with ``costs`` in list order on ``ranks`` workers (no overhead).
+
+    static: round-robin (task k on worker k mod P); dynamic: the next task
+    goes to the first free worker.
+    """
+    if static:
+        loads = [0.0] * ranks
+        for k, c in enumerate(costs):
+            loads[k % ranks] += c
+        return max(loads) if loads else 0.0
+    import heapq
+
+    free = [0.0] * ranks
+    heapq.heapify(free)
+    end = 0.0
+    for c in costs:
+        t = heapq.heappop(free) + c
+        end = max(end, t)
+        heapq.heappush(free, t)
+    return end
+
+
+def study_comm():
+    """MPI.COMM_WORLD when there are several ranks, else None.
+
+    ``runner._comm`` knows mpirun (OMPI_*, PMI_SIZE); under Slurm's ``srun
+    --mpi=pmix`` only PMIX_RANK and SLURM_NTASKS may be set, so those count too.
+    """
+    import os
+
+    from .runner import _comm as comm
+
+    c = comm()
+    if c is None and "PMIX_RANK" in os.environ and int(os.environ.get("SLURM_NTASKS", "1")) > 1:
+        from mpi4py import MPI
+
+        if MPI.COMM_WORLD.size > 1:
+            return MPI.COMM_WORLD
+    return c
