@@ -129,22 +129,30 @@ def run_pyharm(pyharm_python: str | None) -> dict:
         rs = r.summary()
         ref.append((rs["peak_amplitude"], two_pi * rs["peak_frequency_hz"]))
     row = dict(case="pyharm", levels=list(PYHARM_LEVELS), ours=ours, reference=ref)
-    py = pyharm_python or os.environ.get("PYHARM_PYTHON") or str(
-        Path(__file__).resolve().parents[1] / ".venv-bench" / "bin" / "python"
+    py = (
+        pyharm_python
+        or os.environ.get("PYHARM_PYTHON")
+        or str(Path(__file__).resolve().parents[1] / ".venv-bench" / "bin" / "python")
     )
     if not Path(py).is_file():
         row["pyharm"] = None
         row["note"] = f"pyHarm not run: no interpreter at {py} (see benchmarks/pyharm_jenkins.py)"
         return row
-    cmd = [py, str(Path(__file__).with_name("pyharm_jenkins.py")),
-           "--levels", ",".join(f"{v:g}" for v in PYHARM_LEVELS), "--nh", "7", "--nti", "128"]
+    cmd = [
+        py,
+        str(Path(__file__).with_name("pyharm_jenkins.py")),
+        "--levels",
+        ",".join(f"{v:g}" for v in PYHARM_LEVELS),
+        "--nh",
+        "7",
+        "--nti",
+        "128",
+    ]
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     import tempfile
 
     with tempfile.TemporaryDirectory() as tmp:  # pyHarm writes a .pyHarm/ folder in its cwd
-        out = subprocess.run(
-            cmd, capture_output=True, text=True, env=env, timeout=3600, cwd=tmp
-        )
+        out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=3600, cwd=tmp)
     if out.returncode != 0:
         row["pyharm"] = None
         row["note"] = f"pyHarm failed: {out.stderr.strip().splitlines()[-1:]}"
@@ -163,14 +171,18 @@ def print_pyharm(row: dict) -> None:
     tot_o = tot_p = 0.0
     for k, o in enumerate(row["ours"]):
         a_ref, w_ref = row["reference"][k]
-        line = (f"{o['level']:5.2f}  {o['cpu_s']:10.3f}  {o['points']:3d}  "
-                f"{o['peak_amplitude'] / a_ref - 1:+.2e}  {o['peak_omega'] / w_ref - 1:+.2e}")
+        line = (
+            f"{o['level']:5.2f}  {o['cpu_s']:10.3f}  {o['points']:3d}  "
+            f"{o['peak_amplitude'] / a_ref - 1:+.2e}  {o['peak_omega'] / w_ref - 1:+.2e}"
+        )
         tot_o += o["cpu_s"]
         if ph:
             p = ph["levels"][k]
             tot_p += p["cpu_s"]
-            line += (f" | {p['cpu_s']:12.3f}  {p['points']:3d}  "
-                     f"{p['peak_amplitude'] / a_ref - 1:+.2e}  {p['peak_omega'] / w_ref - 1:+.2e}")
+            line += (
+                f" | {p['cpu_s']:12.3f}  {p['points']:3d}  "
+                f"{p['peak_amplitude'] / a_ref - 1:+.2e}  {p['peak_omega'] / w_ref - 1:+.2e}"
+            )
         print(line)  # fmt: skip
     if ph:
         print(f"total CPU: ours {tot_o:.3f} s, pyHarm {tot_p:.3f} s (ratio pyHarm/ours "

@@ -55,8 +55,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--per-line", type=int, default=23, help="contact pairs per line (23)")
     ap.add_argument("--forces", default=",".join(map(str, FORCES)))
     ap.add_argument("--harmonics", default="0,1,2,3")
-    ap.add_argument("--no-stability", action="store_true",
-                    help="HBM curves without Hill's method (the study computes it)")
+    ap.add_argument(
+        "--no-stability",
+        action="store_true",
+        help="HBM curves without Hill's method (the study computes it)",
+    )
     args = ap.parse_args(argv)
     from workbench.hbm import SolverOptions, frequency_response
     from workbench.hbm.examples import line_damper_rig
@@ -73,9 +76,16 @@ def main(argv: list[str] | None = None) -> int:
         for fam in FAMILIES:
             ex = line_damper_rig(n_per_line=args.per_line, family=fam, **kw)
             t0 = time.perf_counter()
-            nm = nonlinear_mode(ex.system, f1=ex.f1, band_hz=ex.band_hz, harmonics=H,
-                                outputs=ex.outputs, levels=forces, max_fold_points=20,
-                                label=f"{dname} {fam}")
+            nm = nonlinear_mode(
+                ex.system,
+                f1=ex.f1,
+                band_hz=ex.band_hz,
+                harmonics=H,
+                outputs=ex.outputs,
+                levels=forces,
+                max_fold_points=20,
+                label=f"{dname} {fam}",
+            )
             t_nm = time.perf_counter() - t0
             t_syn, t_hbm = 0.0, 0.0
             for F in forces:
@@ -83,52 +93,82 @@ def main(argv: list[str] | None = None) -> int:
                 s = synthesize(nm, ex.f1, F, 0, ex.band_hz) if nm.n_points >= 2 else None
                 t_syn += time.perf_counter() - t1
                 t1 = time.perf_counter()
-                b = frequency_response(ex.system, ex.f1, F, ex.band_hz, ex.outputs,
-                                       harmonics=H, options=opts)
+                b = frequency_response(
+                    ex.system, ex.f1, F, ex.band_hz, ex.outputs, harmonics=H, options=opts
+                )
                 dt = time.perf_counter() - t1
                 t_hbm += dt
                 i = b.peak(0)
-                row = dict(damper=dname, family=fam, force_n=F, hbm_s=round(dt, 3),
-                           hbm_peak_hz=float(b.freq_hz[i]) if i >= 0 else None,
-                           hbm_peak_mm=float(b.out_amp[i, 0]) * 1e3 if i >= 0 else None,
-                           hbm_failed=bool(b.failed))
+                row = dict(
+                    damper=dname,
+                    family=fam,
+                    force_n=F,
+                    hbm_s=round(dt, 3),
+                    hbm_peak_hz=float(b.freq_hz[i]) if i >= 0 else None,
+                    hbm_peak_mm=float(b.out_amp[i, 0]) * 1e3 if i >= 0 else None,
+                    hbm_failed=bool(b.failed),
+                )
                 if s is not None:
-                    row.update(syn_peak_hz=s.peak_freq_hz, syn_peak_mm=s.peak_amplitude * 1e3,
-                               valid=s.valid, reasons="; ".join(s.reasons))
+                    row.update(
+                        syn_peak_hz=s.peak_freq_hz,
+                        syn_peak_mm=s.peak_amplitude * 1e3,
+                        valid=s.valid,
+                        reasons="; ".join(s.reasons),
+                    )
                     if i >= 0:
                         row["error_pct"] = 100 * (row["syn_peak_mm"] / row["hbm_peak_mm"] - 1)
                         row["freq_error_pct"] = 100 * (s.peak_freq_hz / row["hbm_peak_hz"] - 1)
                 rows.append(row)
-                print(f"  {dname:18s} {fam:12s} F {F:6.3g} N: HBM {row['hbm_peak_mm']:.5g} mm "
-                      f"at {row['hbm_peak_hz']:.2f} Hz ({dt:.1f} s) | synthesis "
-                      f"{row.get('syn_peak_mm', float('nan')):.5g} mm, error "
-                      f"{row.get('error_pct', float('nan')):+.2f} %, "
-                      f"{'valid' if row.get('valid') else 'NOT valid: ' + row.get('reasons', '')}",
-                      flush=True)
-            groups.append(dict(damper=dname, family=fam, backbone_s=round(t_nm, 3),
-                               synthesis_s=round(t_syn, 4), hbm_s=round(t_hbm, 3),
-                               points=nm.n_points, message=nm.message,
-                               damping_max=float(nm.damping_ratio.max()) if nm.n_points else None))
-            print(f"{dname:18s} {fam:12s}: backbone {t_nm:.1f} s ({nm.n_points} points, "
-                  f"{nm.message}), {len(forces)} HBM curves {t_hbm:.1f} s", flush=True)
+                print(
+                    f"  {dname:18s} {fam:12s} F {F:6.3g} N: HBM {row['hbm_peak_mm']:.5g} mm "
+                    f"at {row['hbm_peak_hz']:.2f} Hz ({dt:.1f} s) | synthesis "
+                    f"{row.get('syn_peak_mm', float('nan')):.5g} mm, error "
+                    f"{row.get('error_pct', float('nan')):+.2f} %, "
+                    f"{'valid' if row.get('valid') else 'NOT valid: ' + row.get('reasons', '')}",
+                    flush=True,
+                )
+            groups.append(
+                dict(
+                    damper=dname,
+                    family=fam,
+                    backbone_s=round(t_nm, 3),
+                    synthesis_s=round(t_syn, 4),
+                    hbm_s=round(t_hbm, 3),
+                    points=nm.n_points,
+                    message=nm.message,
+                    damping_max=float(nm.damping_ratio.max()) if nm.n_points else None,
+                )
+            )
+            print(
+                f"{dname:18s} {fam:12s}: backbone {t_nm:.1f} s ({nm.n_points} points, "
+                f"{nm.message}), {len(forces)} HBM curves {t_hbm:.1f} s",
+                flush=True,
+            )
     t_n = sum(g["backbone_s"] + g["synthesis_s"] for g in groups)
     t_h = sum(g["hbm_s"] for g in groups)
     valid = [r for r in rows if r.get("valid") and r.get("error_pct") is not None]
     errs = [abs(r["error_pct"]) for r in valid]
     summary = dict(
-        n_backbones=len(groups), n_curves=len(rows), backbones_s=round(t_n, 2),
-        hbm_s=round(t_h, 2), time_ratio=round(t_n / t_h, 4) if t_h else None,
-        n_valid=len(valid), max_error_valid_pct=round(max(errs), 3) if errs else None,
+        n_backbones=len(groups),
+        n_curves=len(rows),
+        backbones_s=round(t_n, 2),
+        hbm_s=round(t_h, 2),
+        time_ratio=round(t_n / t_h, 4) if t_h else None,
+        n_valid=len(valid),
+        max_error_valid_pct=round(max(errs), 3) if errs else None,
         mean_error_valid_pct=round(sum(errs) / len(errs), 3) if errs else None,
-        max_error_all_pct=round(max(abs(r["error_pct"]) for r in rows
-                                    if r.get("error_pct") is not None), 3),
+        max_error_all_pct=round(
+            max(abs(r["error_pct"]) for r in rows if r.get("error_pct") is not None), 3
+        ),
         target="time ratio < 0.1 at < 2 % peak error where valid",
         model=f"line_damper_rig, {args.per_line} pairs per line (synthetic, not the FE rig)",
-        harmonics=list(H), stability=not args.no_stability,
+        harmonics=list(H),
+        stability=not args.no_stability,
         loadavg=[load0, os.getloadavg()[0]],
     )
-    (args.out / "bench_nlmodes.json").write_text(json.dumps(
-        dict(summary=summary, groups=groups, rows=rows), indent=1))
+    (args.out / "bench_nlmodes.json").write_text(
+        json.dumps(dict(summary=summary, groups=groups, rows=rows), indent=1)
+    )
     with open(args.out / "bench_nlmodes.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=sorted({k for r in rows for k in r}))
         w.writeheader()

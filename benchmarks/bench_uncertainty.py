@@ -72,11 +72,17 @@ def task_order(costs: dict) -> list[float]:
 def stats(x: np.ndarray) -> dict:
     x = np.asarray(x, float)
     x = x[np.isfinite(x)]
-    return {"n": int(x.size), "mean_s": float(x.mean()), "median_s": float(np.median(x)),
-            "p10_s": float(np.quantile(x, 0.1)), "p90_s": float(np.quantile(x, 0.9)),
-            "min_s": float(x.min()), "max_s": float(x.max()),
-            "max_over_min": float(x.max() / x.min()),
-            "p90_over_p10": float(np.quantile(x, 0.9) / np.quantile(x, 0.1))}
+    return {
+        "n": int(x.size),
+        "mean_s": float(x.mean()),
+        "median_s": float(np.median(x)),
+        "p10_s": float(np.quantile(x, 0.1)),
+        "p90_s": float(np.quantile(x, 0.9)),
+        "min_s": float(x.min()),
+        "max_s": float(x.max()),
+        "max_over_min": float(x.max() / x.min()),
+        "p90_over_p10": float(np.quantile(x, 0.9) / np.quantile(x, 0.1)),
+    }
 
 
 def load_time_per_case(study: Path, n: int = 40) -> float:
@@ -113,11 +119,29 @@ def mpi_replay(costs: list[float], scale: float, ranks: int, tmp: Path) -> dict:
     path = tmp / "replay_costs.json"
     path.write_text(json.dumps(costs))
     code = _REPLAY.format(root=str(ROOT), path=str(path), scale=scale)
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               UPD_NO_PROGRESS="1")
-    p = subprocess.run(["mpirun", "-n", str(ranks), "--oversubscribe", "-x", "OMP_NUM_THREADS=1",
-                        sys.executable, "-c", code], capture_output=True, text=True,
-                       timeout=3600, env=env)
+    env = dict(
+        os.environ,
+        OMPI_ALLOW_RUN_AS_ROOT="1",
+        OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+        UPD_NO_PROGRESS="1",
+    )
+    p = subprocess.run(
+        [
+            "mpirun",
+            "-n",
+            str(ranks),
+            "--oversubscribe",
+            "-x",
+            "OMP_NUM_THREADS=1",
+            sys.executable,
+            "-c",
+            code,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=3600,
+        env=env,
+    )
     if p.returncode:
         raise RuntimeError(p.stderr[-2000:])
     r = json.loads(p.stdout.strip().splitlines()[-1])
@@ -132,21 +156,39 @@ def simulate(costs: list[float], ranks: int) -> dict:
     total = float(sum(costs))
     st = simulate_schedule(costs, ranks, static=True)
     dy = simulate_schedule(costs, ranks, static=False)
-    return {"ranks": ranks, "tasks": len(costs), "ideal_s": total / ranks,
-            "static_s": st, "dynamic_s": dy, "static_eff": total / (ranks * st),
-            "dynamic_eff": total / (ranks * dy)}
+    return {
+        "ranks": ranks,
+        "tasks": len(costs),
+        "ideal_s": total / ranks,
+        "static_s": st,
+        "dynamic_s": dy,
+        "static_eff": total / (ranks * st),
+        "dynamic_eff": total / (ranks * dy),
+    }
 
 
-def projection(costs: dict, *, nodes: int, cores: int,
-               samples: int, t_load: float, run: dict | None, seed: int = 0) -> dict:
+def projection(
+    costs: dict,
+    *,
+    nodes: int,
+    cores: int,
+    samples: int,
+    t_load: float,
+    run: dict | None,
+    seed: int = 0,
+) -> dict:
     """A 10,000-sample study (per damper and family) on nodes x cores ranks."""
     ranks = nodes * cores
     groups = sorted(costs)
     rng = np.random.default_rng(seed)
     # the projected task list: per design row, one task per (damper, family), each cost
     # drawn from that group's measured costs (bootstrap), in the study's interleaved order
-    pools = {k: np.asarray([c for c in costs[k]["cpu_s"] if np.isfinite(c)] or
-                           list(costs[k]["hbm_s"]), float) for k in groups}
+    pools = {
+        k: np.asarray(
+            [c for c in costs[k]["cpu_s"] if np.isfinite(c)] or list(costs[k]["hbm_s"]), float
+        )
+        for k in groups
+    }
     proj = np.column_stack([rng.choice(pools[k], size=samples) for k in groups]).ravel()
     sim = simulate(list(proj), ranks)
     sim_static = sim["static_eff"]
@@ -159,13 +201,23 @@ def projection(costs: dict, *, nodes: int, cores: int,
     total = t_models + t_cases + t_post
     eff2 = run.get("efficiency") if run and run.get("ranks") == 2 else None
     return {
-        "ranks": ranks, "nodes": nodes, "cores_per_node": cores, "cases": n_cases,
-        "samples_per_damper_and_family": samples, "groups": [list(k) for k in groups],
-        "mean_case_cpu_s": float(proj.mean()), "case_cpu_total_h": cpu_total / 3600,
-        "cases_wall_s": t_cases, "dynamic_efficiency": sim["dynamic_eff"],
-        "static_efficiency": sim_static, "cases_per_rank": n_cases / ranks,
-        "models_s": t_models, "post_s": t_post, "total_s": total,
-        "core_hours": ranks * total / 3600, "measured_2rank_efficiency": eff2,
+        "ranks": ranks,
+        "nodes": nodes,
+        "cores_per_node": cores,
+        "cases": n_cases,
+        "samples_per_damper_and_family": samples,
+        "groups": [list(k) for k in groups],
+        "mean_case_cpu_s": float(proj.mean()),
+        "case_cpu_total_h": cpu_total / 3600,
+        "cases_wall_s": t_cases,
+        "dynamic_efficiency": sim["dynamic_eff"],
+        "static_efficiency": sim_static,
+        "cases_per_rank": n_cases / ranks,
+        "models_s": t_models,
+        "post_s": t_post,
+        "total_s": total,
+        "core_hours": ranks * total / 3600,
+        "measured_2rank_efficiency": eff2,
         "assumptions": [
             "a cluster core runs a case in the CPU time measured here (cpu_s: one rank on "
             "one core; the wall times here are inflated by the shared 2-core machine)",
@@ -195,25 +247,32 @@ def markdown(res: dict) -> str:
     lines.append("| group | n | mean, s | median, s | p10, s | p90, s | max/min |")
     lines.append("|---|---|---|---|---|---|---|")
     for k, s in res["per_group"].items():
-        lines.append(f"| {k} | {s['n']} | {s['mean_s']:.2f} | {s['median_s']:.2f} | "
-                     f"{s['p10_s']:.2f} | {s['p90_s']:.2f} | {s['max_over_min']:.1f} |")
+        lines.append(
+            f"| {k} | {s['n']} | {s['mean_s']:.2f} | {s['median_s']:.2f} | "
+            f"{s['p10_s']:.2f} | {s['p90_s']:.2f} | {s['max_over_min']:.1f} |"
+        )
     s = res["all"]
-    lines.append(f"| all | {s['n']} | {s['mean_s']:.2f} | {s['median_s']:.2f} | "
-                 f"{s['p10_s']:.2f} | {s['p90_s']:.2f} | {s['max_over_min']:.1f} |")
+    lines.append(
+        f"| all | {s['n']} | {s['mean_s']:.2f} | {s['median_s']:.2f} | "
+        f"{s['p10_s']:.2f} | {s['p90_s']:.2f} | {s['max_over_min']:.1f} |"
+    )
     lines.append("")
     run = res.get("run") or {}
     if run:
-        lines.append(f"The study's own run: {run.get('ranks')} rank(s), schedule "
-                     f"{run.get('schedule')}, {run.get('n_computed')} cases, wall "
-                     f"{run.get('wall_s', 0):.1f} s, busy {run.get('busy_s', 0):.1f} s, "
-                     f"efficiency {run.get('efficiency', float('nan')):.3f}.")
+        lines.append(
+            f"The study's own run: {run.get('ranks')} rank(s), schedule "
+            f"{run.get('schedule')}, {run.get('n_computed')} cases, wall "
+            f"{run.get('wall_s', 0):.1f} s, busy {run.get('busy_s', 0):.1f} s, "
+            f"efficiency {run.get('efficiency', float('nan')):.3f}."
+        )
         lines.append("")
     rp = res.get("replay")
     if rp:
         lines.append("## Static round-robin vs the shared counter, under mpirun -n 2")
         lines.append("")
-        lines.append(f"The measured costs replayed as sleeps (x{rp['scale']:g}) in the study's "
-                     "task order:")
+        lines.append(
+            f"The measured costs replayed as sleeps (x{rp['scale']:g}) in the study's task order:"
+        )
         lines.append("")
         lines.append("| schedule | wall, s | efficiency |")
         lines.append("|---|---|---|")
@@ -227,22 +286,26 @@ def markdown(res: dict) -> str:
     lines.append("| tasks | ranks | static eff. | dynamic eff. |")
     lines.append("|---|---|---|---|")
     for sm in res["simulated"]:
-        lines.append(f"| {sm['tasks']} | {sm['ranks']} | {sm['static_eff']:.3f} | "
-                     f"{sm['dynamic_eff']:.3f} |")
+        lines.append(
+            f"| {sm['tasks']} | {sm['ranks']} | {sm['static_eff']:.3f} | {sm['dynamic_eff']:.3f} |"
+        )
     lines.append("")
     p = res["projection"]
-    lines.append(f"## Projection: {p['cases']} cases on {p['nodes']} nodes x "
-                 f"{p['cores_per_node']} cores")
+    lines.append(
+        f"## Projection: {p['cases']} cases on {p['nodes']} nodes x {p['cores_per_node']} cores"
+    )
     lines.append("")
-    lines.append(f"- mean case {p['mean_case_cpu_s']:.2f} s CPU; {p['case_cpu_total_h']:.1f} "
-                 f"core-hours of cases; {p['cases_per_rank']:.1f} cases per rank")
-    lines.append(f"- cases: {p['cases_wall_s']:.0f} s wall (dynamic efficiency "
-                 f"{p['dynamic_efficiency']:.3f}; round-robin would give "
-                 f"{p['static_efficiency']:.3f})")
-    lines.append(f"- models {p['models_s']:.0f} s + post-processing "
-                 f"{p['post_s']:.0f} s")
-    lines.append(f"- total {p['total_s'] / 60:.1f} min, {p['core_hours']:.0f} core-hours "
-                 "allocated")
+    lines.append(
+        f"- mean case {p['mean_case_cpu_s']:.2f} s CPU; {p['case_cpu_total_h']:.1f} "
+        f"core-hours of cases; {p['cases_per_rank']:.1f} cases per rank"
+    )
+    lines.append(
+        f"- cases: {p['cases_wall_s']:.0f} s wall (dynamic efficiency "
+        f"{p['dynamic_efficiency']:.3f}; round-robin would give "
+        f"{p['static_efficiency']:.3f})"
+    )
+    lines.append(f"- models {p['models_s']:.0f} s + post-processing {p['post_s']:.0f} s")
+    lines.append(f"- total {p['total_s'] / 60:.1f} min, {p['core_hours']:.0f} core-hours allocated")
     lines.append("")
     lines.append("Assumptions:")
     lines.append("")
@@ -257,18 +320,24 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "results" / "bench_uncertainty")
     ap.add_argument("--nodes", type=int, default=64)
     ap.add_argument("--cores", type=int, default=32)
-    ap.add_argument("--samples", type=int, default=10000,
-                    help="cases per damper and family of the projected study")
-    ap.add_argument("--scale", type=float, default=0.1,
-                    help="replay: sleep this fraction of each measured cost")
+    ap.add_argument(
+        "--samples",
+        type=int,
+        default=10000,
+        help="cases per damper and family of the projected study",
+    )
+    ap.add_argument(
+        "--scale", type=float, default=0.1, help="replay: sleep this fraction of each measured cost"
+    )
     ap.add_argument("--no-replay", action="store_true", help="skip the mpirun replay")
     args = ap.parse_args(argv)
     costs = load_costs(args.study)
     order = task_order(costs)
     res: dict = {"study": str(args.study), "n_cases": len(order)}
-    res["per_group"] = {f"{d}, {f}": stats(np.where(np.isfinite(c["cpu_s"]), c["cpu_s"],
-                                                    c["hbm_s"]))
-                        for (d, f), c in sorted(costs.items())}
+    res["per_group"] = {
+        f"{d}, {f}": stats(np.where(np.isfinite(c["cpu_s"]), c["cpu_s"], c["hbm_s"]))
+        for (d, f), c in sorted(costs.items())
+    }
     res["all"] = stats(np.asarray(order))
     res["wall_per_group"] = {f"{d}, {f}": stats(c["hbm_s"]) for (d, f), c in costs.items()}
     uj = args.study / "uncertainty.json"
@@ -281,8 +350,14 @@ def main(argv: list[str] | None = None) -> int:
     res["simulated"] = [simulate(order, 2)]
     t_load = load_time_per_case(args.study)
     res["load_s_per_case"] = t_load
-    res["projection"] = projection(costs, nodes=args.nodes, cores=args.cores,
-                                   samples=args.samples, t_load=t_load, run=res["run"])
+    res["projection"] = projection(
+        costs,
+        nodes=args.nodes,
+        cores=args.cores,
+        samples=args.samples,
+        t_load=t_load,
+        run=res["run"],
+    )
     res["simulated"].append(_proj_sim(res["projection"]))
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "bench_uncertainty.json").write_text(json.dumps(res, indent=2, default=str))
@@ -293,8 +368,12 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _proj_sim(p: dict) -> dict:
-    return {"tasks": p["cases"], "ranks": p["ranks"], "static_eff": p["static_efficiency"],
-            "dynamic_eff": p["dynamic_efficiency"]}
+    return {
+        "tasks": p["cases"],
+        "ranks": p["ranks"],
+        "static_eff": p["static_efficiency"],
+        "dynamic_eff": p["dynamic_efficiency"],
+    }
 
 
 if __name__ == "__main__":

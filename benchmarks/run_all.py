@@ -48,25 +48,39 @@ def command(part: str, out: Path) -> list[str]:
         "slow-tests": [PY, "-m", "pytest", "-q", "-m", "slow", "-p", "no:cacheprovider"],
         "fidelity": [UPD, "study", str(ROOT / "studies" / "fidelity.toml"), "--out", d],
         "robustness": [UPD, "study", str(ROOT / "studies" / "robustness.toml"), "--out", d],
-        "runup": [PY, str(ROOT / "benchmarks" / "runup_ratchet.py"), "--periods", "400",
-                  "--out", d],
+        "runup": [
+            PY,
+            str(ROOT / "benchmarks" / "runup_ratchet.py"),
+            "--periods",
+            "400",
+            "--out",
+            d,
+        ],
     }[part]
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter,
-                                 epilog=__doc__.split("\n\n", 1)[1])
-    ap.add_argument("--out", type=Path, default=ROOT / "results" / "bench",
-                    help="folder of the results (default results/bench)")
-    ap.add_argument("--parts", default=",".join(PARTS),
-                    help="comma list of parts among " + ", ".join(PARTS))
+    ap = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=__doc__.split("\n\n", 1)[1],
+    )
+    ap.add_argument(
+        "--out",
+        type=Path,
+        default=ROOT / "results" / "bench",
+        help="folder of the results (default results/bench)",
+    )
+    ap.add_argument(
+        "--parts", default=",".join(PARTS), help="comma list of parts among " + ", ".join(PARTS)
+    )
     args = ap.parse_args(argv)
     parts = [p.strip() for p in args.parts.split(",") if p.strip()]
     for p in parts:
         if p not in PARTS:
-            print(f"error: --parts: '{p}' is not a part; allowed: {', '.join(PARTS)}",
-                  file=sys.stderr)
+            print(
+                f"error: --parts: '{p}' is not a part; allowed: {', '.join(PARTS)}", file=sys.stderr
+            )
             return 2
     args.out.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
@@ -81,8 +95,11 @@ def main(argv: list[str] | None = None) -> int:
             code = subprocess.call(cmd, cwd=ROOT, env=env, stdout=log, stderr=subprocess.STDOUT)
         wall = time.perf_counter() - t0
         summary[part] = {"exit_code": code, "wall_s": round(wall, 1), "log": str(log_path)}
-        print(f"[{i}/{len(parts)}] {part}: {'ok' if code == 0 else f'FAILED (exit {code})'} "
-              f"in {wall:.0f} s", flush=True)
+        print(
+            f"[{i}/{len(parts)}] {part}: {'ok' if code == 0 else f'FAILED (exit {code})'} "
+            f"in {wall:.0f} s",
+            flush=True,
+        )
         with open(args.out / "summary.json", "w") as f:
             json.dump(summary, f, indent=2)
     bad = [p for p, s in summary.items() if s["exit_code"] != 0]

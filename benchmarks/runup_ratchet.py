@@ -44,8 +44,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--periods", type=int, default=400, help="periods to integrate")
     ap.add_argument("--steps", type=int, default=128, help="steps per period")
     ap.add_argument("--ramp", type=float, default=0.0, help="ramp the force in over N periods")
-    ap.add_argument("--continue", dest="cont", action="store_true",
-                    help="continue from the state saved in --out")
+    ap.add_argument(
+        "--continue",
+        dest="cont",
+        action="store_true",
+        help="continue from the state saved in --out",
+    )
     ap.add_argument("--out", default=str(ROOT / "results" / "runup"))
     a = ap.parse_args(argv)
 
@@ -56,8 +60,13 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     tag = f"{a.damper}_{a.phase:g}deg_{a.force:g}N"
-    m = wb.model(a.damper, out=out / "cache", geometry=a.geometry, mesh_size=a.mesh_size,
-                 harmonics=[0, 1, 2, 3])
+    m = wb.model(
+        a.damper,
+        out=out / "cache",
+        geometry=a.geometry,
+        mesh_size=a.mesh_size,
+        harmonics=[0, 1, 2, 3],
+    )
     t0 = time.perf_counter()
     c = wb.frf(m, force_n=a.force, phase_deg=a.phase)
     t_hbm = time.perf_counter() - t0
@@ -74,13 +83,14 @@ def main(argv: list[str] | None = None) -> int:
     from workbench.hbm.balance import HarmonicBalance
     from workbench.hbm.fourier import Fourier
 
-    hb = HarmonicBalance(system, model.excitation(a.phase), Fourier(b.harmonics, b.nt), O,
-                         a.force)
+    hb = HarmonicBalance(system, model.excitation(a.phase), Fourier(b.harmonics, b.nt), O, a.force)
     ev = hb.evaluate(b.x[i], 2 * np.pi * f_pk)
     hbm_n = float(np.mean(-ev.aft.F[0, :, 2] / system.contacts.n0))
-    print(f"harmonic balance ({t_hbm:.1f} s): peak {f_pk:.2f} Hz, h1 {hbm_h1 * 1e3:.4f} mm, "
-          f"mean {hbm_mean * 1e3:+.4f} mm, mean N/N0 {hbm_n:.3f}, "
-          f"friction energy {c.summary()['friction_energy_mj']:.3g} mJ")
+    print(
+        f"harmonic balance ({t_hbm:.1f} s): peak {f_pk:.2f} Hz, h1 {hbm_h1 * 1e3:.4f} mm, "
+        f"mean {hbm_mean * 1e3:+.4f} mm, mean N/N0 {hbm_n:.3f}, "
+        f"friction energy {c.summary()['friction_energy_mj']:.3g} mJ"
+    )
 
     state_file = out / f"{tag}.state.pkl"
     start, prev = None, None
@@ -93,8 +103,18 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  run-up: {done}/{total} periods, {el:.0f} s", file=sys.stderr, flush=True)
 
     t1 = time.perf_counter()
-    ru = runup(system, model.excitation(a.phase), a.force, f_pk, O, periods=a.periods,
-               steps_per_period=a.steps, ramp_periods=a.ramp, start=start, progress=progress)
+    ru = runup(
+        system,
+        model.excitation(a.phase),
+        a.force,
+        f_pk,
+        O,
+        periods=a.periods,
+        steps_per_period=a.steps,
+        ramp_periods=a.ramp,
+        start=start,
+        progress=progress,
+    )
     t_run = time.perf_counter() - t1
     h1 = ru.h1[:, 0]
     mean = ru.mean[:, 0]
@@ -106,13 +126,22 @@ def main(argv: list[str] | None = None) -> int:
     state_file.write_bytes(pickle.dumps(dict(state=ru.state, h1=h1, mean=mean, nr=nr, slip=slip)))
     onset = int(np.argmax(slip > 0)) if (slip > 0).any() else -1
     rec = dict(
-        damper=a.damper, force_n=a.force, phase_deg=a.phase, geometry=a.geometry,
-        freq_hz=f_pk, hbm_h1_mm=hbm_h1 * 1e3, hbm_mean_mm=hbm_mean * 1e3,
-        hbm_normal_ratio=hbm_n, periods=int(h1.size), runup_s=t_run,
+        damper=a.damper,
+        force_n=a.force,
+        phase_deg=a.phase,
+        geometry=a.geometry,
+        freq_hz=f_pk,
+        hbm_h1_mm=hbm_h1 * 1e3,
+        hbm_mean_mm=hbm_mean * 1e3,
+        hbm_normal_ratio=hbm_n,
+        periods=int(h1.size),
+        runup_s=t_run,
         first_slip_period=onset,
         h1_at_first_slip_mm=float(h1[onset] * 1e3) if onset >= 0 else None,
-        end_h1_mm=float(h1[-1] * 1e3), end_mean_mm=float(mean[-1] * 1e3),
-        end_normal_ratio=float(nr[-1]), end_slip_samples=int(slip[-1]),
+        end_h1_mm=float(h1[-1] * 1e3),
+        end_mean_mm=float(mean[-1] * 1e3),
+        end_normal_ratio=float(nr[-1]),
+        end_slip_samples=int(slip[-1]),
         change_last_10_periods=float(abs(h1[-1] - h1[-11]) / h1[-1]) if h1.size > 11 else None,
     )
     (out / f"{tag}.json").write_text(json.dumps(rec, indent=1))
@@ -141,9 +170,11 @@ def _plot(path: Path, rec: dict, h1, mean, nr, slip) -> None:
     ax2.set_ylabel("slipping samples\nx pairs per period", color="C3")
     ax[2].set_ylabel("mean normal load /\npreload (-)", color="C2")
     ax[2].set_xlabel("period")
-    fig.suptitle(f"{rec['damper']}, {rec['phase_deg']:g} deg, {rec['force_n']:g} N at "
-                 f"{rec['freq_hz']:.1f} Hz: run-up from rest (lines) vs harmonic balance (dashed)",
-                 fontsize=9)
+    fig.suptitle(
+        f"{rec['damper']}, {rec['phase_deg']:g} deg, {rec['force_n']:g} N at "
+        f"{rec['freq_hz']:.1f} Hz: run-up from rest (lines) vs harmonic balance (dashed)",
+        fontsize=9,
+    )
     fig.savefig(path, dpi=130)
     print(f"figure: {path}")
 

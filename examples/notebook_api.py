@@ -28,8 +28,10 @@ for row in m.inputs():  # every value used, with its unit and where it came from
 curves = [wb.frf(m, force_n=f, phase_deg=180.0, harmonics=[0, 1, 2]) for f in (3.84, 30.0)]
 for c in curves:
     s = c.summary()
-    print(f"{c.force_n:5g} N: peak {s['peak_amplitude_mm']:.4g} mm at "
-          f"{s['peak_frequency_hz']:.2f} Hz, friction energy {s['friction_energy_mj']:.3g} mJ")
+    print(
+        f"{c.force_n:5g} N: peak {s['peak_amplitude_mm']:.4g} mm at "
+        f"{s['peak_frequency_hz']:.2f} Hz, friction energy {s['friction_energy_mj']:.3g} mJ"
+    )
 
 # 3. figures: matplotlib Figure objects; written only when asked
 fig = wb.receptance_figure(curves)  # in a notebook, the cell shows it

@@ -68,8 +68,9 @@ def contact_layout(damper: str, n_per_line: int = 23) -> tuple[np.ndarray, np.nd
                 n = 15 if row % 2 == 0 else 14
                 t = (np.arange(n) + (0.5 if row % 2 == 0 else 1.0)) / 15.0
                 for tt in t:
-                    pts.append([sign * (0.004 + 0.0015 * row), -0.02 + 0.04 * tt,
-                                0.186 + 0.0015 * row])
+                    pts.append(
+                        [sign * (0.004 + 0.0015 * row), -0.02 + 0.04 * tt, 0.186 + 0.0015 * row]
+                    )
                     side.append(s)
                     xi.append(tt)
         else:
@@ -81,8 +82,9 @@ def contact_layout(damper: str, n_per_line: int = 23) -> tuple[np.ndarray, np.nd
     return np.array(pts), np.array(side, dtype=int), np.array(xi)
 
 
-def _gains(damper: str, phase_deg: float, xi: np.ndarray, rng: np.random.Generator,
-           slip_scale: float) -> np.ndarray:
+def _gains(
+    damper: str, phase_deg: float, xi: np.ndarray, rng: np.random.Generator, slip_scale: float
+) -> np.ndarray:
     """Share of the relative platform motion that each pair has to slip."""
     n = xi.size
     if abs(phase_deg - 180.0) < 1e-9:
@@ -94,8 +96,9 @@ def _gains(damper: str, phase_deg: float, xi: np.ndarray, rng: np.random.Generat
     return 0.9 + 0.1 * rng.random(n)
 
 
-def _describing(gj: np.ndarray, a: float, ac: np.ndarray, kt: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
+def _describing(
+    gj: np.ndarray, a: float, ac: np.ndarray, kt: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Per pair: equivalent stiffness (N/m, on the modal coordinate) and energy per cycle (J)."""
     u = gj * a
     slip = u > ac
@@ -106,11 +109,21 @@ def _describing(gj: np.ndarray, a: float, ac: np.ndarray, kt: np.ndarray
     return gj**2 * keq, energy
 
 
-def synthetic_case(damper: str, phase_deg: float, force_n: float, *, seed: int = 0,
-                   points: np.ndarray | None = None, side: np.ndarray | None = None,
-                   slip_scale: float = 1.0, cf_scale: float = 1.0, n_side: int = 120,
-                   fail_at: float | None = None, params: dict | None = None,
-                   variant: str = "") -> CaseResult:
+def synthetic_case(
+    damper: str,
+    phase_deg: float,
+    force_n: float,
+    *,
+    seed: int = 0,
+    points: np.ndarray | None = None,
+    side: np.ndarray | None = None,
+    slip_scale: float = 1.0,
+    cf_scale: float = 1.0,
+    n_side: int = 120,
+    fail_at: float | None = None,
+    params: dict | None = None,
+    variant: str = "",
+) -> CaseResult:
     """One case: a Branch over the family's band, statuses and energies of every pair.
 
     ``points``/``side`` replace the synthetic layout (e.g. the contact
@@ -120,8 +133,14 @@ def synthetic_case(damper: str, phase_deg: float, force_n: float, *, seed: int =
     ``fail_at`` (0..1) cuts the branch at that fraction of its points and
     marks it failed, as a diverged corrector would.
     """
-    rng = np.random.default_rng([seed, int(round(phase_deg)), int(round(force_n * 1000)),
-                                 DAMPERS.index(damper) if damper in DAMPERS else 9])
+    rng = np.random.default_rng(
+        [
+            seed,
+            int(round(phase_deg)),
+            int(round(force_n * 1000)),
+            DAMPERS.index(damper) if damper in DAMPERS else 9,
+        ]
+    )
     if points is None:
         points, side, xi = contact_layout(damper)
     else:
@@ -198,30 +217,58 @@ def synthetic_case(damper: str, phase_deg: float, force_n: float, *, seed: int =
     w_fric = energy.sum(axis=1)
     w_visc = np.pi * eta * ks * amp**2
     br = Branch(
-        level=force_n, band_hz=band, harmonics=(0, 1, 2, 3), nt=64,
-        output_names=("blade1_x",), freq_hz=freq[sl], stable=stable[sl],
-        newton_its=np.full(npts, 3), energy_residual=np.full(npts, 1e-9),
-        out_amp=amp[sl, None] * 1.02, out_h1=amp[sl, None],
-        out_harm=np.zeros((npts, 7, 1)), status=status[sl], friction_energy=energy[sl],
-        x=np.zeros((npts, 0)), work_ext=(w_fric + w_visc)[sl], work_visc=w_visc[sl],
-        work_friction=w_fric[sl], work_normal=np.zeros(npts),
+        level=force_n,
+        band_hz=band,
+        harmonics=(0, 1, 2, 3),
+        nt=64,
+        output_names=("blade1_x",),
+        freq_hz=freq[sl],
+        stable=stable[sl],
+        newton_its=np.full(npts, 3),
+        energy_residual=np.full(npts, 1e-9),
+        out_amp=amp[sl, None] * 1.02,
+        out_h1=amp[sl, None],
+        out_harm=np.zeros((npts, 7, 1)),
+        status=status[sl],
+        friction_energy=energy[sl],
+        x=np.zeros((npts, 0)),
+        work_ext=(w_fric + w_visc)[sl],
+        work_visc=w_visc[sl],
+        work_friction=w_fric[sl],
+        work_normal=np.zeros(npts),
         max_floquet_real=np.where(stable[sl], -1.0, 5.0),
-        completed=fail_at is None, failed=fail_at is not None,
-        message=(f"corrector diverged at {freq[npts - 1]:.1f} Hz (DIVERGED_LINE_SEARCH)"
-                 if fail_at is not None else ""),
+        completed=fail_at is None,
+        failed=fail_at is not None,
+        message=(
+            f"corrector diverged at {freq[npts - 1]:.1f} Hz (DIVERGED_LINE_SEARCH)"
+            if fail_at is not None
+            else ""
+        ),
         timings={"total": 0.5},
     )
-    return CaseResult(damper=damper, phase_deg=phase_deg, force_n=force_n, branch=br,
-                      points=np.asarray(points, float), side=np.asarray(side, int),
-                      params=dict(params or {}), variant=variant,
-                      timings={"hbm": 0.5})
+    return CaseResult(
+        damper=damper,
+        phase_deg=phase_deg,
+        force_n=force_n,
+        branch=br,
+        points=np.asarray(points, float),
+        side=np.asarray(side, int),
+        params=dict(params or {}),
+        variant=variant,
+        timings={"hbm": 0.5},
+    )
 
 
-def synthetic_study(dampers: tuple[str, ...] = DAMPERS, phases: tuple[float, ...] = PHASES,
-                    forces: tuple[float, ...] = FORCES, *, seed: int = 0,
-                    fail: tuple[str, float, float] | None = None,
-                    layouts: dict[str, tuple[np.ndarray, np.ndarray]] | None = None,
-                    name: str = "synthetic") -> StudyResults:
+def synthetic_study(
+    dampers: tuple[str, ...] = DAMPERS,
+    phases: tuple[float, ...] = PHASES,
+    forces: tuple[float, ...] = FORCES,
+    *,
+    seed: int = 0,
+    fail: tuple[str, float, float] | None = None,
+    layouts: dict[str, tuple[np.ndarray, np.ndarray]] | None = None,
+    name: str = "synthetic",
+) -> StudyResults:
     """A comparison study: every damper x family x force (plan order).
 
     ``fail = (damper, phase_deg, force_n)`` makes that case's branch stop
@@ -233,17 +280,29 @@ def synthetic_study(dampers: tuple[str, ...] = DAMPERS, phases: tuple[float, ...
             for f in forces:
                 failing = fail is not None and fail == (d, p, f)
                 pts, sd = (layouts or {}).get(d, (None, None))
-                cases.append(synthetic_case(d, p, f, seed=seed, points=pts, side=sd,
-                                            fail_at=0.6 if failing else None))
-    return StudyResults(name=name, kind="comparison", cases=cases,
-                        inputs={"dampers": list(dampers), "phases": list(phases),
-                                "forces": list(forces)},
-                        timings={"hbm": 0.5 * len(cases)})
+                cases.append(
+                    synthetic_case(
+                        d, p, f, seed=seed, points=pts, side=sd, fail_at=0.6 if failing else None
+                    )
+                )
+    return StudyResults(
+        name=name,
+        kind="comparison",
+        cases=cases,
+        inputs={"dampers": list(dampers), "phases": list(phases), "forces": list(forces)},
+        timings={"hbm": 0.5 * len(cases)},
+    )
 
 
-def synthetic_sweep(option: str, values: tuple[float, ...], *,
-                    dampers: tuple[str, ...] = DAMPERS, phases: tuple[float, ...] = PHASES,
-                    forces: tuple[float, ...] = (30.0,), seed: int = 0) -> StudyResults:
+def synthetic_sweep(
+    option: str,
+    values: tuple[float, ...],
+    *,
+    dampers: tuple[str, ...] = DAMPERS,
+    phases: tuple[float, ...] = PHASES,
+    forces: tuple[float, ...] = (30.0,),
+    seed: int = 0,
+) -> StudyResults:
     """A sweep study of ``option`` ("cf", N, or "cone-angle", deg) over ``values``.
 
     CF scales the slip limits (preload) in proportion to ``value / values[0]``;
@@ -262,11 +321,24 @@ def synthetic_sweep(option: str, values: tuple[float, ...], *,
                     if option == "cf":
                         kw["cf_scale"] = v / values[0]
                     elif option == "cone-angle" and d == "cone":
-                        kw["slip_scale"] = float(max_slip_ratio(v, 45.0, 10.0, 40.0)
-                                                 / max_slip_ratio(10.0, 45.0, 10.0, 40.0))
-                    cases.append(synthetic_case(d, p, f, seed=seed, params={option: v},
-                                                variant=f"{option}={v:g}", **kw))
-    return StudyResults(name=f"sweep-{option}", kind="sweep", cases=cases,
-                        inputs={"sweep": option, "sweep-values": list(values),
-                                "dampers": list(dampers), "phases": list(phases),
-                                "forces": list(forces)})
+                        kw["slip_scale"] = float(
+                            max_slip_ratio(v, 45.0, 10.0, 40.0)
+                            / max_slip_ratio(10.0, 45.0, 10.0, 40.0)
+                        )
+                    cases.append(
+                        synthetic_case(
+                            d, p, f, seed=seed, params={option: v}, variant=f"{option}={v:g}", **kw
+                        )
+                    )
+    return StudyResults(
+        name=f"sweep-{option}",
+        kind="sweep",
+        cases=cases,
+        inputs={
+            "sweep": option,
+            "sweep-values": list(values),
+            "dampers": list(dampers),
+            "phases": list(phases),
+            "forces": list(forces),
+        },
+    )

@@ -54,7 +54,10 @@ def designs():
     """Valid designs: beta 5..85 deg, alpha_c up to 0.98 beta, R1 1..40 mm, L 5..120 mm."""
     return st.builds(
         lambda b, f, r1, L: ConeDesign(beta_deg=b, cone_angle_deg=f * b, r1_mm=r1, length_mm=L),
-        st.floats(5.0, 85.0), st.floats(0.0, 0.98), st.floats(1.0, 40.0), st.floats(5.0, 120.0),
+        st.floats(5.0, 85.0),
+        st.floats(0.0, 0.98),
+        st.floats(1.0, 40.0),
+        st.floats(5.0, 120.0),
     )
 
 
@@ -76,8 +79,9 @@ def test_gamma_is_the_tangency_condition_and_eq3(beta, frac):
     """
     ac = frac * beta
     g = np.radians(inclination_deg(ac, beta))
-    assert np.sin(g) == pytest.approx(np.sin(np.radians(ac)) / np.sin(np.radians(beta)),
-                                      rel=TRIG_TOL, abs=1e-300)
+    assert np.sin(g) == pytest.approx(
+        np.sin(np.radians(ac)) / np.sin(np.radians(beta)), rel=TRIG_TOL, abs=1e-300
+    )
     assert g == pytest.approx(_eq3_as_printed(ac, beta), abs=5e-8)
 
 
@@ -136,8 +140,9 @@ def test_slip_zero_at_middle_linear_and_antisymmetric(d):
 
 def test_lead_reference_values():
     """Hand computation: beta 45, alpha_c 10, R1 10, L 40 -> s_max/v = 0.352 (eq 6)."""
-    assert paper_kinematics(ConeDesign(45, 10, 10, 40)).max_slip_ratio == pytest.approx(0.352,
-                                                                                       abs=5e-4)
+    assert paper_kinematics(ConeDesign(45, 10, 10, 40)).max_slip_ratio == pytest.approx(
+        0.352, abs=5e-4
+    )
     assert max_slip_ratio(20.0, 45.0, 5.0, 40.0) == pytest.approx(0.69, abs=5e-3)
 
 
@@ -146,11 +151,14 @@ def test_lead_reference_values():
 FIG6_TOL = 0.05
 
 
-@pytest.mark.parametrize("r1, length, paper_value", [
-    (5.0, 40.0, 0.7),   # Fig. 6b, R1 = 5 mm
-    (20.0, 40.0, 0.3),  # Fig. 6b, R1 = 20 mm
-    (10.0, 60.0, 0.6),  # Fig. 6c, L = 60 mm
-])
+@pytest.mark.parametrize(
+    "r1, length, paper_value",
+    [
+        (5.0, 40.0, 0.7),  # Fig. 6b, R1 = 5 mm
+        (20.0, 40.0, 0.3),  # Fig. 6b, R1 = 20 mm
+        (10.0, 60.0, 0.6),  # Fig. 6c, L = 60 mm
+    ],
+)
 def test_figure6_maxima(r1, length, paper_value):
     ac = np.linspace(0.0, 45.0, 4501)[:-1]
     best = max_slip_ratio(ac, 45.0, r1, length).max()
@@ -181,22 +189,25 @@ def test_larger_radius_less_slip_longer_damper_more_slip():
 # -- bad input -----------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("kwargs, param, fragment", [
-    (dict(beta_deg=45, cone_angle_deg=45), "cone_angle_deg", "vertical"),
-    (dict(beta_deg=45, cone_angle_deg=50), "cone_angle_deg", "< beta_deg = 45 deg"),
-    (dict(cone_angle_deg=-1), "cone_angle_deg", "0 deg <= cone_angle_deg"),
-    (dict(r1_mm=-5), "r1_mm", "0.001 mm <= r1_mm"),
-    (dict(r1_mm=0), "r1_mm", "0.001 mm <= r1_mm"),
-    (dict(length_mm=-1), "length_mm", "0.001 mm <= length_mm"),
-    (dict(beta_deg=90), "beta_deg", "beta_deg <= 89 deg"),
-    (dict(beta_deg=120), "beta_deg", "beta_deg <= 89 deg"),
-    (dict(beta_deg=0), "beta_deg", "1 deg <= beta_deg"),
-    (dict(beta_deg="abc"), "beta_deg", "not a number"),
-    (dict(cone_angle_deg="ten"), "cone_angle_deg", "not a number"),
-    (dict(r1_mm=float("nan")), "r1_mm", "not a finite number"),
-    (dict(length_mm=None), "length_mm", "not a number"),
-    (dict(cone_angle_deg=True), "cone_angle_deg", "not a number"),
-])
+@pytest.mark.parametrize(
+    "kwargs, param, fragment",
+    [
+        (dict(beta_deg=45, cone_angle_deg=45), "cone_angle_deg", "vertical"),
+        (dict(beta_deg=45, cone_angle_deg=50), "cone_angle_deg", "< beta_deg = 45 deg"),
+        (dict(cone_angle_deg=-1), "cone_angle_deg", "0 deg <= cone_angle_deg"),
+        (dict(r1_mm=-5), "r1_mm", "0.001 mm <= r1_mm"),
+        (dict(r1_mm=0), "r1_mm", "0.001 mm <= r1_mm"),
+        (dict(length_mm=-1), "length_mm", "0.001 mm <= length_mm"),
+        (dict(beta_deg=90), "beta_deg", "beta_deg <= 89 deg"),
+        (dict(beta_deg=120), "beta_deg", "beta_deg <= 89 deg"),
+        (dict(beta_deg=0), "beta_deg", "1 deg <= beta_deg"),
+        (dict(beta_deg="abc"), "beta_deg", "not a number"),
+        (dict(cone_angle_deg="ten"), "cone_angle_deg", "not a number"),
+        (dict(r1_mm=float("nan")), "r1_mm", "not a finite number"),
+        (dict(length_mm=None), "length_mm", "not a number"),
+        (dict(cone_angle_deg=True), "cone_angle_deg", "not a number"),
+    ],
+)
 def test_bad_design_is_refused_naming_parameter_value_and_range(kwargs, param, fragment):
     with pytest.raises(InputError) as e:
         ConeDesign(**kwargs)
@@ -231,8 +242,9 @@ def _surface(geo, n_xi=121, n_th=1441):
     th = np.linspace(0.0, 2 * np.pi, n_th)
     e1 = np.array([1.0, 0.0, 0.0])
     e2 = np.cross(geo.axis, e1)
-    return (geo.section_center(xi)[:, None, :] + geo.radius(xi)[:, None, None]
-            * (np.cos(th)[None, :, None] * e1 + np.sin(th)[None, :, None] * e2))
+    return geo.section_center(xi)[:, None, :] + geo.radius(xi)[:, None, None] * (
+        np.cos(th)[None, :, None] * e1 + np.sin(th)[None, :, None] * e2
+    )
 
 
 @pytest.mark.parametrize("beta, ac", [(45, 0), (45, 10), (36, 30), (60, 15), (80, 79)])
@@ -253,8 +265,9 @@ def test_cone_touches_both_planes_along_lines_and_never_crosses_them(beta, ac):
     for k in range(2):
         assert np.abs(pts[k] @ geo.normals[k]).max() < 1e-12
         rel = pts[k] - geo.section_center(np.linspace(0.0, d.length_mm, 11))
-        np.testing.assert_allclose(np.linalg.norm(rel, axis=1),
-                                   geo.radius(np.linspace(0.0, d.length_mm, 11)), rtol=1e-12)
+        np.testing.assert_allclose(
+            np.linalg.norm(rel, axis=1), geo.radius(np.linspace(0.0, d.length_mm, 11)), rtol=1e-12
+        )
         np.testing.assert_allclose(rel @ geo.axis, 0.0, atol=1e-12)
     # axis makes the angle alpha_c with both planes
     np.testing.assert_allclose(geo.normals @ geo.axis, np.sin(np.radians(ac)), atol=TRIG_TOL)
@@ -312,9 +325,11 @@ def test_3d_solve_matches_closed_form(d):
     pk = paper_kinematics(d)
     if pk.max_slip_ratio > 1e-6:
         expected = np.cos(np.radians(pk.alpha1_deg)) / (
-            2 * np.cos(np.radians(d.beta_deg)) * np.cos(np.radians(d.cone_angle_deg)))
-        assert kin.max_transverse_slip_ratio / pk.max_slip_ratio == pytest.approx(expected,
-                                                                                  rel=1e-8)
+            2 * np.cos(np.radians(d.beta_deg)) * np.cos(np.radians(d.cone_angle_deg))
+        )
+        assert kin.max_transverse_slip_ratio / pk.max_slip_ratio == pytest.approx(
+            expected, rel=1e-8
+        )
 
 
 def test_3d_design_values():
@@ -392,8 +407,10 @@ def test_finite_motion_converges_to_the_linear_slip_at_second_order():
     def error(v):
         theta = lin.rotation_rad * v
         ang = np.linalg.norm(theta)
-        kx = np.array([[0, -theta[2], theta[1]], [theta[2], 0, -theta[0]],
-                       [-theta[1], theta[0], 0]]) / ang
+        kx = (
+            np.array([[0, -theta[2], theta[1]], [theta[2], 0, -theta[0]], [-theta[1], theta[0], 0]])
+            / ang
+        )
         R = np.eye(3) + np.sin(ang) * kx + (1 - np.cos(ang)) * kx @ kx
         p = lin.points_mm
         moved = cm + lin.translation_mm * v + (p - cm) @ R.T
@@ -414,7 +431,8 @@ def test_sweep_equals_one_solve_per_design():
         kin = rigid_body_kinematics(ConeDesign(45.0, a, 10.0, 40.0), n_points=41)
         assert sw["max_slip_ratio"][i] == pytest.approx(kin.max_slip_ratio, abs=1e-12)
         assert sw["max_transverse_slip_ratio"][i] == pytest.approx(
-            kin.max_transverse_slip_ratio, abs=1e-12)
+            kin.max_transverse_slip_ratio, abs=1e-12
+        )
     with pytest.raises(InputError, match="cone_angle_deg"):
         sweep_cone_angle([10.0, 45.0], 45.0, 10.0, 40.0)
 
@@ -427,8 +445,9 @@ def test_vertical_limit_of_the_sweeps():
     t = comparison_table(ConeDesign(45, 10, 10, 40))
     assert t["max_slip_ratio_paper"][-1] < 0.01
     assert t["max_transverse_slip_ratio_3d"][-1] < 0.01
-    assert t["max_longitudinal_slip_ratio_3d"][-1] == pytest.approx(1 / (2 * np.cos(np.pi / 4)),
-                                                                    rel=0.01)
+    assert t["max_longitudinal_slip_ratio_3d"][-1] == pytest.approx(
+        1 / (2 * np.cos(np.pi / 4)), rel=0.01
+    )
     # near the cylinder limit the like-for-like ratio is 1/2
     assert t["transverse_3d_over_paper"][1] == pytest.approx(0.5, abs=1e-3)
 
@@ -443,8 +462,9 @@ def test_chart_tables_and_csv_round_trip(tmp_path):
     along = slip_along_table(d, 11)
     assert sorted(set(along["cone_angle_deg"])) == [5.0, 10.0, 12.0, 15.0]
     # both lines carry the same slip magnitudes
-    np.testing.assert_allclose(along.where(side=0)["slip_ratio_3d"],
-                               along.where(side=1)["slip_ratio_3d"], atol=SOLVE_TOL)
+    np.testing.assert_allclose(
+        along.where(side=0)["slip_ratio_3d"], along.where(side=1)["slip_ratio_3d"], atol=SOLVE_TOL
+    )
     mx = max_slip_table(d, 2.0)
     assert set(mx["family"]) == {"beta", "r1", "length"}
     assert sorted(set(mx.where(family="r1")["r1_mm"])) == [5.0, 8.0, 10.0, 20.0]

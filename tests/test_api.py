@@ -52,8 +52,11 @@ def test_example_runs_and_leaves_matplotlib_alone(example, capsys):
     assert "mm/N" in ax.get_ylabel() and "Hz" in ax.get_xlabel()
     for name in ("receptance.png", "status.png", "sdof_frf.png"):
         assert_nonblank(out / name)
-    assert sorted(p.name for p in out.glob("*.png")) == ["receptance.png", "sdof_frf.png",
-                                                         "status.png"]
+    assert sorted(p.name for p in out.glob("*.png")) == [
+        "receptance.png",
+        "sdof_frf.png",
+        "status.png",
+    ]
 
 
 def test_example_curves_and_inputs(example):
@@ -86,10 +89,13 @@ def test_frf_refuses_model_options_and_unknown_names(example):
 
 
 def test_import_workbench_is_light():
-    code = ("import sys, workbench as wb; assert callable(wb.model); "
-            "print(sorted(m for m in ('dolfinx', 'matplotlib', 'pyvista', 'gmsh') "
-            "if m in sys.modules))")
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       cwd=Path(__file__).parent)
+    code = (
+        "import sys, workbench as wb; assert callable(wb.model); "
+        "print(sorted(m for m in ('dolfinx', 'matplotlib', 'pyvista', 'gmsh') "
+        "if m in sys.modules))"
+    )
+    r = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=Path(__file__).parent
+    )
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == "[]"

@@ -103,8 +103,12 @@ def run_inprocess(argv: list[str], cwd: Path) -> tuple[int, str, str]:
     from workbench.cli.main import main
 
     out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), \
-            contextlib.redirect_stderr(err), _own_logging():
+    with (
+        contextlib.chdir(cwd),
+        contextlib.redirect_stdout(out),
+        contextlib.redirect_stderr(err),
+        _own_logging(),
+    ):
         try:
             code = main(argv)
         except SystemExit as e:  # argparse

@@ -23,8 +23,9 @@ def test_modes_cylinder_coarse(tmp_path):
 
     The coarse rig mesh shifts the default-mesh value (404 Hz) by under 1 %.
     """
-    r = run_upd("modes", "--damper", "cylinder", "--size", "12", "--n", "4",
-                "--out", tmp_path, "--json")
+    r = run_upd(
+        "modes", "--damper", "cylinder", "--size", "12", "--n", "4", "--out", tmp_path, "--json"
+    )
     assert r.code == 0, r
     s = r.json
     assert s["contact"] == "stuck" and len(s["freqs_hz"]) == 4
@@ -32,8 +33,10 @@ def test_modes_cylinder_coarse(tmp_path):
     f_out = s["first_bending_out_of_phase"]["freq_hz"]
     assert 350.0 <= f_out <= 450.0
     assert f_in < f_out  # the cylinder rolls: in phase it barely loads its springs
-    assert s["modes"][s["first_bending_out_of_phase"]["mode"] - 1]["label"] == \
-        "first bending out-of-phase"
+    assert (
+        s["modes"][s["first_bending_out_of_phase"]["mode"] - 1]["label"]
+        == "first bending out-of-phase"
+    )
     for key in ("modes_rig_xdmf", "modes_damper_xdmf"):
         assert (tmp_path / os.path.basename(s["files"][key])).is_file()
     # ParaView/meshio/pyvista files: mode numbers from 1, each VTU with its frequency
@@ -55,8 +58,19 @@ def test_modes_cylinder_coarse(tmp_path):
 
 def test_reduce_wedge_coarse_then_reuse(tmp_path):
     """Reduced models written, the stuck check agrees with a rerun that reuses them."""
-    args = ("reduce", "--damper", "wedge", "--size", "12", "--modes", "6", "--rigid-damper",
-            "--out", tmp_path, "--json")
+    args = (
+        "reduce",
+        "--damper",
+        "wedge",
+        "--size",
+        "12",
+        "--modes",
+        "6",
+        "--rigid-damper",
+        "--out",
+        tmp_path,
+        "--json",
+    )
     r = run_upd(*args)
     assert r.code == 0, r
     s = r.json
@@ -73,13 +87,16 @@ def test_reduce_wedge_coarse_then_reuse(tmp_path):
     assert 350.0 <= s["stuck_reduced"]["first_bending_out_of_phase_hz"] <= 450.0
 
 
-@pytest.mark.parametrize("args, word", [
-    (("modes", "--damper", "cone", "--contact", "slipping"), "contact"),
-    (("modes", "--damper", "cone", "--n", "0"), "n = 0"),
-    (("modes", "--damper", "sphere"), "damper"),
-    (("reduce", "--damper", "cone", "--modes", "-2"), "modes"),
-    (("reduce", "--damper", "cone", "--modes", "twelve"), "modes"),
-])
+@pytest.mark.parametrize(
+    "args, word",
+    [
+        (("modes", "--damper", "cone", "--contact", "slipping"), "contact"),
+        (("modes", "--damper", "cone", "--n", "0"), "n = 0"),
+        (("modes", "--damper", "sphere"), "damper"),
+        (("reduce", "--damper", "cone", "--modes", "-2"), "modes"),
+        (("reduce", "--damper", "cone", "--modes", "twelve"), "modes"),
+    ],
+)
 def test_bad_input_is_one_line_exit_2(tmp_path, args, word):
     r = run_upd(*args, "--out", tmp_path)
     assert r.code == 2, r
@@ -96,9 +113,26 @@ def test_modes_under_mpirun_matches_serial(tmp_path):
     serial = run_upd(*common, "--out", tmp_path / "serial")
     assert serial.code == 0, serial
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", UPD_NO_PROGRESS="1")
-    p = subprocess.run([exe, "-n", "2", "--allow-run-as-root", "--oversubscribe", sys.executable,
-                        "-m", "workbench.cli.main", *common, "--out", str(tmp_path / "mpi")],
-                       capture_output=True, text=True, timeout=300, cwd=ROOT, env=env)
+    p = subprocess.run(
+        [
+            exe,
+            "-n",
+            "2",
+            "--allow-run-as-root",
+            "--oversubscribe",
+            sys.executable,
+            "-m",
+            "workbench.cli.main",
+            *common,
+            "--out",
+            str(tmp_path / "mpi"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+        env=env,
+    )
     assert p.returncode == 0, p.stderr[-3000:]
     par = json.loads(p.stdout)  # exactly one JSON document: rank 0 prints
     for a, b in zip(serial.json["freqs_hz"], par["freqs_hz"], strict=True):

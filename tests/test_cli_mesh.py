@@ -7,13 +7,27 @@ from pathlib import Path
 import pytest
 from conftest import assert_nonblank
 
-KEYS = ("n_nodes", "n_cells", "n_contact_pairs", "max_pair_gap_m", "damper_volume_m3",
-        "damper_mass_kg")
+KEYS = (
+    "n_nodes",
+    "n_cells",
+    "n_contact_pairs",
+    "max_pair_gap_m",
+    "damper_volume_m3",
+    "damper_mass_kg",
+)
 
 
 def check_files(out: Path, res) -> None:
-    for name in ("rig.msh", "damper.msh", "rig.xdmf", "damper.xdmf", "rig.h5", "damper.h5",
-                 "geometry.h5", "scene.png"):
+    for name in (
+        "rig.msh",
+        "damper.msh",
+        "rig.xdmf",
+        "damper.xdmf",
+        "rig.h5",
+        "damper.h5",
+        "geometry.h5",
+        "scene.png",
+    ):
         assert (out / name).is_file(), name
     assert_nonblank(out / "scene.png")
     assert res.json["files"]["png"] == str(out / "scene.png")
@@ -62,24 +76,36 @@ def test_human_output(upd, tmp_path):
     assert not (tmp_path / "scene.png").exists()
 
 
-@pytest.mark.parametrize("args,toml,needle", [
-    (["--damper", "con"], None, "did you mean 'cone'"),
-    (["--damper", "cone", "--size", "0"], None, "size_mm = 0.0 is not allowed"),
-    (["--damper", "cone", "--size", "-3"], None, "size_mm = -3.0 is not allowed"),
-    (["--damper", "cone", "--size", "abc"], None, "not a number"),
-    (["--damper", "cone"], "[cone]\nsemi_angle_deg = 50.0\n",
-     "cone.semi_angle_deg = 50.0 is not allowed"),
-    (["--damper", "cone"], "[cone]\nlength_mm = 90.0\n", "cone.length_mm = 90.0"),
-    (["--damper", "cylinder"], "[cylinder]\nradius_mm = 30.0\n", "cylinder.radius_mm = 30.0"),
-    (["--damper", "wedge"], "[wedge]\ntop_width_mm = 2.0\n", "wedge.top_width_mm = 2.0"),
-    (["--damper", "cylinder"], "[cylinder]\nn_contact_points = 1\n",
-     "cylinder.n_contact_points = 1 is not allowed"),
-    (["--damper", "wedge"], "[rig.mesh]\ncontact_size_mm = -1.0\n",
-     "rig.mesh.contact_size_mm = -1.0 is not allowed"),
-    (["--damper", "cone"], "[cone]\nsemi_angel_deg = 5.0\n", "did you mean 'semi_angle_deg'"),
-    (["--damper", "cone"], "[rig.platfrom]\nangle_deg = 40.0\n", "did you mean 'platform'"),
-    (["--damper", "cone", "--geometry", "/nonexistent/g.toml"], None, "an existing TOML file"),
-])
+@pytest.mark.parametrize(
+    "args,toml,needle",
+    [
+        (["--damper", "con"], None, "did you mean 'cone'"),
+        (["--damper", "cone", "--size", "0"], None, "size_mm = 0.0 is not allowed"),
+        (["--damper", "cone", "--size", "-3"], None, "size_mm = -3.0 is not allowed"),
+        (["--damper", "cone", "--size", "abc"], None, "not a number"),
+        (
+            ["--damper", "cone"],
+            "[cone]\nsemi_angle_deg = 50.0\n",
+            "cone.semi_angle_deg = 50.0 is not allowed",
+        ),
+        (["--damper", "cone"], "[cone]\nlength_mm = 90.0\n", "cone.length_mm = 90.0"),
+        (["--damper", "cylinder"], "[cylinder]\nradius_mm = 30.0\n", "cylinder.radius_mm = 30.0"),
+        (["--damper", "wedge"], "[wedge]\ntop_width_mm = 2.0\n", "wedge.top_width_mm = 2.0"),
+        (
+            ["--damper", "cylinder"],
+            "[cylinder]\nn_contact_points = 1\n",
+            "cylinder.n_contact_points = 1 is not allowed",
+        ),
+        (
+            ["--damper", "wedge"],
+            "[rig.mesh]\ncontact_size_mm = -1.0\n",
+            "rig.mesh.contact_size_mm = -1.0 is not allowed",
+        ),
+        (["--damper", "cone"], "[cone]\nsemi_angel_deg = 5.0\n", "did you mean 'semi_angle_deg'"),
+        (["--damper", "cone"], "[rig.platfrom]\nangle_deg = 40.0\n", "did you mean 'platform'"),
+        (["--damper", "cone", "--geometry", "/nonexistent/g.toml"], None, "an existing TOML file"),
+    ],
+)
 def test_bad_input_is_one_line_and_exit_2(upd, tmp_path, args, toml, needle):
     if toml is not None:
         f = tmp_path / "g.toml"

@@ -31,11 +31,15 @@ def test_an_error_on_one_rank_aborts_every_rank(tmp_path):
     assert exe, "mpirun is not installed (scripts/setup.sh installs OpenMPI)"
     script = tmp_path / "one_rank_fails.py"
     script.write_text(SCRIPT)
-    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
-               PYTHONPATH=str(ROOT))
-    p = subprocess.run([exe, "-n", "2", "--allow-run-as-root", "--oversubscribe",
-                        sys.executable, str(script)], capture_output=True, text=True,
-                       timeout=120, env=env, cwd=tmp_path)
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", PYTHONPATH=str(ROOT))
+    p = subprocess.run(
+        [exe, "-n", "2", "--allow-run-as-root", "--oversubscribe", sys.executable, str(script)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        cwd=tmp_path,
+    )
     # a hang would end in the timeout above; an abort ends the job with a non-zero code
     assert p.returncode != 0
     err = p.stderr + p.stdout

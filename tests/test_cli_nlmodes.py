@@ -10,9 +10,20 @@ from conftest import ROOT, assert_nonblank, run_upd
 
 def test_nlmodes_model_file(tmp_path):
     out = tmp_path / "nm"
-    r = run_upd("nlmodes", ROOT / "studies" / "examples" / "two_dof_contact.toml",
-                "--levels", "2", "--harmonics", "0,1,2,3", "--nt", "64", "--compare", "--json",
-                "--out", out)
+    r = run_upd(
+        "nlmodes",
+        ROOT / "studies" / "examples" / "two_dof_contact.toml",
+        "--levels",
+        "2",
+        "--harmonics",
+        "0,1,2,3",
+        "--nt",
+        "64",
+        "--compare",
+        "--json",
+        "--out",
+        out,
+    )
     assert r.code == 0, r
     s = r.json
     bb = s["backbone"]
@@ -29,8 +40,14 @@ def test_nlmodes_model_file(tmp_path):
 
 
 def test_nlmodes_bad_input(tmp_path):
-    r = run_upd("nlmodes", ROOT / "studies" / "examples" / "two_dof_contact.toml",
-                "--range", "1", "--out", tmp_path)
+    r = run_upd(
+        "nlmodes",
+        ROOT / "studies" / "examples" / "two_dof_contact.toml",
+        "--range",
+        "1",
+        "--out",
+        tmp_path,
+    )
     assert r.code == 2 and "--range" in r.err
     r = run_upd("nlmodes", tmp_path / "missing.toml")
     assert r.code == 2
@@ -40,8 +57,16 @@ def test_nlmodes_bad_input(tmp_path):
 def test_study_with_nonlinear_modes(tmp_path):
     """The smallest real study with its backbone, synthesis and HBM check in the report."""
     out = tmp_path / "tiny"
-    r = run_upd("study", ROOT / "tests" / "studies" / "tiny.toml", "--nonlinear-modes",
-                "--no-stability", "--json", "--out", out, timeout=3000)
+    r = run_upd(
+        "study",
+        ROOT / "tests" / "studies" / "tiny.toml",
+        "--nonlinear-modes",
+        "--no-stability",
+        "--json",
+        "--out",
+        out,
+        timeout=3000,
+    )
     assert r.code == 0, r
     man = json.loads((out / "manifest.json").read_text())
     ids = [s["id"] for s in man["sections"]]

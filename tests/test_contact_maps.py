@@ -32,8 +32,7 @@ def cone(tmp_path_factory):
 
 
 def _case(geo, force_n: float):
-    return synthetic_case("cone", 0.0, force_n, points=geo.contact.points,
-                          side=geo.contact.side)
+    return synthetic_case("cone", 0.0, force_n, points=geo.contact.points, side=geo.contact.side)
 
 
 def _pixels_of(png, hex_color: str, rows: float = SCENE_ROWS, tol: float = 12 / 255) -> int:
@@ -92,7 +91,7 @@ def test_energy_picture_changes_with_the_energies(cone, tmp_path):
     rows = np.flatnonzero(changed.any(axis=1))
     top = int(SCENE_ROWS * ia.shape[0])
     scene = changed[:top]
-    upper, lower = scene[: top // 2].sum(), scene[top // 2:].sum()
+    upper, lower = scene[: top // 2].sum(), scene[top // 2 :].sum()
     assert upper > 10 * max(lower, 1), (upper, lower, rows.min(), rows.max())
 
 
@@ -111,14 +110,20 @@ def test_contact_maps_refuse_bad_input(cone, tmp_path):
 
 def test_sections_paint_the_dampers_given(cone, tmp_path):
     geo, gdir = cone
-    r = synthetic_study(dampers=("cone", "cylinder"), phases=(180.0,), forces=(9.6, 30.0),
-                        layouts={"cone": (geo.contact.points, geo.contact.side)})
+    r = synthetic_study(
+        dampers=("cone", "cylinder"),
+        phases=(180.0,),
+        forces=(9.6, 30.0),
+        layouts={"cone": (geo.contact.points, geo.contact.side)},
+    )
     sections = build_sections(r, tmp_path, geometry_dirs={"cone": gdir})
     maps = next(s for s in sections if s["id"] == "contact-maps")
     paths = [f["path"] for f in maps["figures"]]
     # the cone (its geometry given) at the highest force; not the cylinder
-    assert paths == ["figures/contact_out-of-phase_cone_status.png",
-                     "figures/contact_out-of-phase_cone_energy.png"]
+    assert paths == [
+        "figures/contact_out-of-phase_cone_status.png",
+        "figures/contact_out-of-phase_cone_energy.png",
+    ]
     assert all("F = 30 N" in f["caption"] for f in maps["figures"])
     for p in paths:
         assert_nonblank(tmp_path / p)

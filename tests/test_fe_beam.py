@@ -34,8 +34,14 @@ def hz(lam: np.ndarray) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def beam(tmp_path_factory):
-    path = beam_msh(tmp_path_factory.mktemp("beam") / "beam.msh", length=L, width=W,
-                    thickness=H, lc=0.005, points=BEAM_POINTS)
+    path = beam_msh(
+        tmp_path_factory.mktemp("beam") / "beam.msh",
+        length=L,
+        width=W,
+        thickness=H,
+        lc=0.005,
+        points=BEAM_POINTS,
+    )
     body = assemble_body(read_msh(path), MAT, name="beam", clamped="clamped")
     return body, eigen_solve(body.K, body.M, 8)
 
@@ -137,14 +143,21 @@ def test_unknown_clamped_group_is_refused(beam):
 A, B, C = 0.02, 0.016, 0.01  # block sizes in x, y, z (m)
 ORIGIN = np.array([0.1, -0.02, 0.15])  # away from the origin: the centroid matters
 BLOCK_POINTS = ORIGIN + np.array(
-    [[0, y, C / 2] for y in (0.004, 0.008, 0.012)] + [[A, y, C / 2] for y in (0.004, 0.012)]
-    + [[A / 2, 0.008, C]])
+    [[0, y, C / 2] for y in (0.004, 0.008, 0.012)]
+    + [[A, y, C / 2] for y in (0.004, 0.012)]
+    + [[A / 2, 0.008, C]]
+)
 
 
 @pytest.fixture(scope="module")
 def block(tmp_path_factory):
-    path = block_msh(tmp_path_factory.mktemp("block") / "block.msh", size=(A, B, C),
-                     origin=ORIGIN, lc=0.004, points=BLOCK_POINTS)
+    path = block_msh(
+        tmp_path_factory.mktemp("block") / "block.msh",
+        size=(A, B, C),
+        origin=ORIGIN,
+        lc=0.004,
+        points=BLOCK_POINTS,
+    )
     fm = read_msh(path)
     return fm, assemble_body(fm, MAT, name="damper")
 
@@ -174,7 +187,7 @@ def test_free_block_craig_bampton(block):
     lam = sl.eigh(cb.K, cb.M, eigvals_only=True)
     scale = lam[6]
     assert np.all(np.abs(lam[:6]) < 1e-8 * scale)
-    full = eigen_solve(body.K, body.M, 12, sigma=-(2 * np.pi * 10.0) ** 2).eigenvalues
+    full = eigen_solve(body.K, body.M, 12, sigma=-((2 * np.pi * 10.0) ** 2)).eigenvalues
     assert np.all(np.abs(full[:6]) < 1e-6 * full[6])  # six rigid modes in the full model
     f_red, f_full = hz(lam[6:10]), hz(full[6:10])
     assert np.all(f_red >= f_full * (1 - 1e-9))

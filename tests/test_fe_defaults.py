@@ -48,8 +48,9 @@ def test_reduced_and_rigid_match_full_on_the_default_cone_rig(tmp_path):
     geom = build_geometry("cone", tmp_path / "geometry")
     soft = load_contact_params(kt_line_n_per_m2=2.7e7, kn_line_n_per_m2=2.7e7)
     rig = reduce_body(geom, "rig", cache_dir=tmp_path / "fe")
-    dampers = {r: reduce_body(geom, "damper", rigid=r, cache_dir=tmp_path / "fe")
-               for r in (False, True)}
+    dampers = {
+        r: reduce_body(geom, "damper", rigid=r, cache_dir=tmp_path / "fe") for r in (False, True)
+    }
 
     def reduced_hz(params, rigid):
         K, M = stuck_reduced_system(rig, dampers[rigid], geom.contact, params)

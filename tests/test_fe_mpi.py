@@ -56,8 +56,18 @@ def mpirun(tmp_path, geom_h5, n_modes: int, ranks: int = 2) -> dict:
     script.write_text(SCRIPT)
     out = tmp_path / f"mpi{ranks}.npz"
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", UPD_NO_PROGRESS="1")
-    cmd = [exe, "-n", str(ranks), "--allow-run-as-root", "--oversubscribe",
-           sys.executable, str(script), str(geom_h5), str(out), str(n_modes)]
+    cmd = [
+        exe,
+        "-n",
+        str(ranks),
+        "--allow-run-as-root",
+        "--oversubscribe",
+        sys.executable,
+        str(script),
+        str(geom_h5),
+        str(out),
+        str(n_modes),
+    ]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
     assert p.returncode == 0, p.stderr[-3000:]
     data = dict(np.load(out))
@@ -87,8 +97,9 @@ def serial_results(geom, n_modes: int) -> dict:
     for name, rigid in (("rig", False), ("damper", False), ("damper_rigid", True)):
         rm = reduce_body(geom, name.split("_")[0], rigid=rigid, n_modes=n_modes)
         out[name + "_K"], out[name + "_M"] = rm.K, rm.M
-    res = compute_modes(geom, contact="stuck", n=6, contact_params=load_contact_params(),
-                        shapes=False)
+    res = compute_modes(
+        geom, contact="stuck", n=6, contact_params=load_contact_params(), shapes=False
+    )
     out["freqs"] = res.freqs_hz
     out["resp"] = res.response_disp
     return out
@@ -99,8 +110,7 @@ def test_two_ranks_match_serial_toy_rig(toy, tmp_path):
     geom, h5 = toy
     serial = serial_results(geom, 4)
     par = mpirun(tmp_path, h5, 4)
-    check_same(serial, par, ["freqs", "rig_K", "rig_M", "damper_K", "damper_M",
-                             "damper_rigid_M"])
+    check_same(serial, par, ["freqs", "rig_K", "rig_M", "damper_K", "damper_M", "damper_rigid_M"])
     assert rel(serial["resp"], par["resp"]) < 1e-6  # shapes: eigenvector accuracy ~ tol/gap
 
 
@@ -112,5 +122,4 @@ def test_two_ranks_match_serial_real_rig(tmp_path):
     geom = build_geometry("cone", tmp_path / "geometry")
     serial = serial_results(geom, 12)
     par = mpirun(tmp_path, tmp_path / "geometry" / "geometry.h5", 12)
-    check_same(serial, par, ["freqs", "rig_K", "rig_M", "damper_K", "damper_M",
-                             "damper_rigid_M"])
+    check_same(serial, par, ["freqs", "rig_K", "rig_M", "damper_K", "damper_M", "damper_rigid_M"])

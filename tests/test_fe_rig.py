@@ -33,21 +33,22 @@ N = 8
 # The toy rig's own contact stiffness (not geometry/contact.toml, which is tuned
 # for the real rig): soft enough that the block damper's modes on its springs
 # sit among the blade modes, the hard case for a reduction.
-PARAMS = load_contact_params(kt_line_n_per_m2=2.7e7, kn_line_n_per_m2=2.7e7,
-                             kt_face_n_per_m3=2.7e9, kn_face_n_per_m3=2.7e9)
+PARAMS = load_contact_params(
+    kt_line_n_per_m2=2.7e7, kn_line_n_per_m2=2.7e7, kt_face_n_per_m3=2.7e9, kn_face_n_per_m3=2.7e9
+)
 
 
 def hz(K, M, n=N):
-    return np.sqrt(np.maximum(sl.eigh(K, M, eigvals_only=True, subset_by_index=[0, n - 1]),
-                              0)) / (2 * np.pi)
+    return np.sqrt(np.maximum(sl.eigh(K, M, eigvals_only=True, subset_by_index=[0, n - 1]), 0)) / (
+        2 * np.pi
+    )
 
 
 @pytest.fixture(scope="module")
 def rig(tmp_path_factory):
     out = tmp_path_factory.mktemp("toy")
     geom = toy_rig(out / "geometry", lc=0.004)
-    stuck = compute_modes(geom, contact="stuck", n=N, contact_params=PARAMS,
-                          out_dir=out / "modes")
+    stuck = compute_modes(geom, contact="stuck", n=N, contact_params=PARAMS, out_dir=out / "modes")
     cache = out / "cache"
     models = {
         "rig": reduce_body(geom, "rig", cache_dir=cache),
@@ -113,13 +114,15 @@ def test_first_bending_pair_is_recognised(rig):
 def test_classify_bending_rules():
     """Hand-made shapes: in-phase, out-of-phase, single blade, second bending, torsion."""
     x = np.array([1.0, 0, 0])
-    shapes = np.array([
-        [0.1 * np.array([0, 1, 0]), 0.1 * np.array([0, 1, 0])],  # y motion: not bending in x
-        [x, x * 0.9],  # in-phase
-        [x, -x],  # out-of-phase
-        [x, 0.01 * x],  # blade 1 alone
-        [x, x],  # in-phase, but the excitation point moves the other way: 2nd bending
-    ])
+    shapes = np.array(
+        [
+            [0.1 * np.array([0, 1, 0]), 0.1 * np.array([0, 1, 0])],  # y motion: not bending in x
+            [x, x * 0.9],  # in-phase
+            [x, -x],  # out-of-phase
+            [x, 0.01 * x],  # blade 1 alone
+            [x, x],  # in-phase, but the excitation point moves the other way: 2nd bending
+        ]
+    )
     exc = 0.3 * shapes.copy()
     exc[4] *= -1
     labels, i_in, i_out = classify_bending(shapes, exc)

@@ -24,8 +24,18 @@ from workbench.studies.spec import resolve
 
 
 def test_pareto_front_known_points():
-    pts = [(1.0, 10.0), (2.0, 5.0), (3.0, 7.0), (4.0, 1.0), (4.0, 0.5), (5.0, None),
-           (0.5, 20.0), (6.0, 0.5), (7.0, float("nan")), (8.0, 0.1)]
+    pts = [
+        (1.0, 10.0),
+        (2.0, 5.0),
+        (3.0, 7.0),
+        (4.0, 1.0),
+        (4.0, 0.5),
+        (5.0, None),
+        (0.5, 20.0),
+        (6.0, 0.5),
+        (7.0, float("nan")),
+        (8.0, 0.1),
+    ]
     # (3, 7) is beaten by (2, 5); (4, 1) by (4, 0.5); (6, 0.5) ties in error but is slower;
     # None / NaN errors (failed settings) are never on the front
     assert pareto_front(pts) == [6, 0, 1, 4, 9]
@@ -33,15 +43,18 @@ def test_pareto_front_known_points():
 
 def _dominated(i, pts):
     ti, ei = pts[i]
-    return any((tj <= ti and ej <= ei) and (tj < ti or ej < ei)
-               for j, (tj, ej) in enumerate(pts) if j != i)
+    return any(
+        (tj <= ti and ej <= ei) and (tj < ti or ej < ei) for j, (tj, ej) in enumerate(pts) if j != i
+    )
 
 
 def test_pareto_front_matches_brute_force():
     rng = random.Random(8)
     for _ in range(50):
-        pts = [(rng.choice([1, 2, 3, 4, 5, 6]) * 1.0, rng.choice([0.1, 0.5, 1.0, 2.0, 4.0]))
-               for _ in range(rng.randint(1, 12))]
+        pts = [
+            (rng.choice([1, 2, 3, 4, 5, 6]) * 1.0, rng.choice([0.1, 0.5, 1.0, 2.0, 4.0]))
+            for _ in range(rng.randint(1, 12))
+        ]
         front = pareto_front(pts)
         expect = {i for i in range(len(pts)) if not _dominated(i, pts)}
         # exact duplicates are not dominated by each other: the front keeps one of them
@@ -59,8 +72,13 @@ def _row(label, t, e):
 
 
 def test_pick_cheapest_meeting_the_tolerance():
-    rows = [_row("coarse", 1.0, 5.0), _row("a", 3.0, 0.9), _row("b", 2.0, 0.99),
-            _row("fine", 10.0, 0.01), _row("failed", 0.5, None)]
+    rows = [
+        _row("coarse", 1.0, 5.0),
+        _row("a", 3.0, 0.9),
+        _row("b", 2.0, 0.99),
+        _row("fine", 10.0, 0.01),
+        _row("failed", 0.5, None),
+    ]
     p = pick_cheapest(rows, 1.0)
     assert p["met"] and p["picked"]["label"] == "b"
     assert "cheapest" in p["reason"] and "'b'" in p["reason"]
@@ -84,16 +102,22 @@ def _ladder(knob, values, errors):
     out = []
     for v, e in zip(values, errors, strict=True):
         st = Setting(str(v), {knob: v}, "knob")
-        st.errors = {} if e is None else {"c": {"peak_amplitude_mm": e,
-                                                "peak_frequency_hz": 0.0,
-                                                "friction_energy_mj": 0.0}}
+        st.errors = (
+            {}
+            if e is None
+            else {
+                "c": {"peak_amplitude_mm": e, "peak_frequency_hz": 0.0, "friction_energy_mj": 0.0}
+            }
+        )
         out.append(st)
     return out
 
 
 def test_propose_combination_takes_the_coarsest_level_meeting_alone():
-    ladders = {"modes": _ladder("modes", [4, 8, 12, 24], [3.0, 0.8, 0.2, 0.0]),
-               "nt": _ladder("nt", [16, 32, 64], [None, 0.5, 0.0])}
+    ladders = {
+        "modes": _ladder("modes", [4, 8, 12, 24], [3.0, 0.8, 0.2, 0.0]),
+        "nt": _ladder("nt", [16, 32, 64], [None, 0.5, 0.0]),
+    }
     vals, why = propose_combination(ladders, 1.0)
     assert vals == {"modes": 8, "nt": 32}
     assert "0.8" in why["modes"]
@@ -102,8 +126,9 @@ def test_propose_combination_takes_the_coarsest_level_meeting_alone():
     vals, _ = propose_combination(ladders, 1.0, shift=5)  # never beyond the finest
     assert vals == {"modes": 24, "nt": 64}
     # explicit per-level errors (e.g. against each knob's own finest level) take precedence
-    vals, why = propose_combination(ladders, 1.0, errors={"modes": [0.5, 0.1, 0.0, 0.0],
-                                                          "nt": [2.0, 0.9, 0.0]})
+    vals, why = propose_combination(
+        ladders, 1.0, errors={"modes": [0.5, 0.1, 0.0, 0.0], "nt": [2.0, 0.9, 0.0]}
+    )
     assert vals == {"modes": 4, "nt": 32} and "0.9" in why["nt"]
     ladders["nt"] = _ladder("nt", [16, 32], [4.0, 2.0])
     assert propose_combination(ladders, 1.0) is None
@@ -146,9 +171,16 @@ def test_cli_bad_tolerance_is_one_line_exit_2():
 def test_study_help_mentions_the_fidelity_options():
     r = run_upd("study", "--help")
     assert r.code == 0
-    for opt in ("--tolerance", "--knobs", "--levels-mesh-size", "--levels-modes",
-                "--levels-harmonics", "--levels-nt", "--levels-points-per-line",
-                "--levels-rigid-damper"):
+    for opt in (
+        "--tolerance",
+        "--knobs",
+        "--levels-mesh-size",
+        "--levels-modes",
+        "--levels-harmonics",
+        "--levels-nt",
+        "--levels-points-per-line",
+        "--levels-rigid-damper",
+    ):
         assert opt in r.out, opt
 
 
@@ -160,11 +192,14 @@ def test_the_study_file_resolves():
     assert spec.kind == "fidelity" and spec.tolerance == 1.0
     settings, ladders = plan_settings(spec, "cone")
     ref = next(s for s in settings if s.role == "reference")
-    assert ref.values == {"mesh-size": min(spec.levels_mesh_size),
-                          "modes": max(spec.levels_modes), "harmonics": list(range(8)),
-                          "nt": max(spec.levels_nt),
-                          "points-per-line": max(spec.levels_points_per_line),
-                          "rigid-damper": False}
+    assert ref.values == {
+        "mesh-size": min(spec.levels_mesh_size),
+        "modes": max(spec.levels_modes),
+        "harmonics": list(range(8)),
+        "nt": max(spec.levels_nt),
+        "points-per-line": max(spec.levels_points_per_line),
+        "rigid-damper": False,
+    }
     assert len(spec.levels_mesh_size) >= 4
     # every setting is distinct; one knob differs from the base in each ladder setting
     assert len({s.key for s in settings}) == len(settings)
@@ -219,14 +254,22 @@ def test_tiny_reference_error_is_zero_and_errors_converge(tiny):
     for q in ("peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj"):
         assert ref[f"err_{q}_pct"] == 0.0
     # AFT samples: 16 -> 32 -> 64 -> 128 (the reference) converges; harmonics 1 -> 0-5 too
-    assert (rows["nt 16"]["max_error_pct"] > rows["nt 32"]["max_error_pct"]
-            > rows["base"]["max_error_pct"] > 0.0)
+    assert (
+        rows["nt 16"]["max_error_pct"]
+        > rows["nt 32"]["max_error_pct"]
+        > rows["base"]["max_error_pct"]
+        > 0.0
+    )
     assert rows["H 1"]["max_error_pct"] > rows["base"]["max_error_pct"]
     # every setting pays geometry and reduction, even those that found them cached
     for r in rows.values():
         assert r["geometry_s"] > 0 and r["reduction_s"] > 0 and r["hbm_s"] > 0
-        assert math.isclose(r["time_s"], r["geometry_s"] + r["reduction_s"] + r["assembly_s"]
-                            + r["hbm_s"], rel_tol=1e-6, abs_tol=2e-3)
+        assert math.isclose(
+            r["time_s"],
+            r["geometry_s"] + r["reduction_s"] + r["assembly_s"] + r["hbm_s"],
+            rel_tol=1e-6,
+            abs_tol=2e-3,
+        )
     # same model for every setting: the same recorded geometry and reduction times
     assert len({(r["geometry_s"], r["reduction_s"]) for r in rows.values()}) == 1
     # the Pareto front is non-dominated among the candidates (the reference is not one)
@@ -252,12 +295,17 @@ def test_tiny_tolerance_pick_is_the_cheapest_meeting(tiny):
     # the first combination: per knob, the coarsest level within tol of the knob's finest
     own = s["knob_self_errors_pct"]
     assert own["nt"]["nt 128"] == 0.0 and own["harmonics"]["H 0-5"] == 0.0
-    want = {k: next(lv for lv, e in errs.items() if e is not None and e <= tol)
-            for k, errs in own.items()}
+    want = {
+        k: next(lv for lv, e in errs.items() if e is not None and e <= tol)
+        for k, errs in own.items()
+    }
     c = s["combinations"][0]
     assert [lv.split(" (")[0] for lv in c["levels"].values()] == list(want.values())
-    match = [r for r in s["settings"] if r["role"] != "combined"
-             and all(r[k] == lv for k, lv in want.items())]
+    match = [
+        r
+        for r in s["settings"]
+        if r["role"] != "combined" and all(r[k] == lv for k, lv in want.items())
+    ]
     if match and match[0]["role"] == "reference":
         assert c["label"] == "reference" and not c["meets"]
     elif match:  # an already measured setting: not computed again
@@ -281,16 +329,19 @@ def test_tiny_outputs_and_report(tiny):
     assert s["picked"]["reason"] in pick_text
     for f in ("fidelity_harmonics.png", "fidelity_nt.png", "fidelity_pareto.png"):
         assert_nonblank(out / "figures" / f)
-    for t in ("fidelity_settings.csv", "fidelity_pareto.csv", "fidelity_cases.csv",
-              "fidelity_nt.csv"):
+    for t in (
+        "fidelity_settings.csv",
+        "fidelity_pareto.csv",
+        "fidelity_cases.csv",
+        "fidelity_nt.csv",
+    ):
         assert (out / "tables" / t).is_file()
     assert (out / "report.html").stat().st_size > 10_000
 
 
 def test_tiny_second_run_reuses_everything(tiny):
     d, first = tiny
-    r = run_upd("study", d / "tiny.toml", "--tolerance", TOL, "--out", d / "out", "--json",
-                "-q")
+    r = run_upd("study", d / "tiny.toml", "--tolerance", TOL, "--out", d / "out", "--json", "-q")
     assert r.code == 0, r
     s = r.json
     assert s["n_computed"] == 0 and s["n_models_prepared"] == 0
@@ -320,16 +371,27 @@ def test_tiny_failed_case_has_no_error_and_is_never_picked(tiny):
     same = Setting("same", {}, "knob", results={"c": good})
     same.errors = relative_errors(same, ref)
     assert same.error() == 0.0
-    rows = [{"label": s.label, "time_s": t, "max_error_pct": s.error()}
-            for s, t in ((st, 1.0), (same, 2.0))]
+    rows = [
+        {"label": s.label, "time_s": t, "max_error_pct": s.error()}
+        for s, t in ((st, 1.0), (same, 2.0))
+    ]
     assert pick_cheapest(rows, 1.0)["picked"]["label"] == "same"
 
 
 @pytest.mark.slow
 def test_real_fidelity_study(tmp_path):
     """The shipped study (about 15-25 min on 2 busy cores): reference exact, a clear pick."""
-    r = run_upd("study", ROOT / "studies" / "fidelity.toml", "--tolerance", "1%", "--out",
-                tmp_path / "fid", "--json", "-q", timeout=5400)
+    r = run_upd(
+        "study",
+        ROOT / "studies" / "fidelity.toml",
+        "--tolerance",
+        "1%",
+        "--out",
+        tmp_path / "fid",
+        "--json",
+        "-q",
+        timeout=5400,
+    )
     assert r.code == 0, r
     s = r.json
     rows = _by_label(s)

@@ -30,8 +30,9 @@ COUNTS = {"contact pair number", "contact element", "stuck / 0"}
 
 @pytest.fixture(scope="module")
 def study():
-    return synthetic_study(dampers=("cone", "cylinder", "wedge"), phases=(0.0, 180.0),
-                           forces=(0.96, 9.6, 30.0))
+    return synthetic_study(
+        dampers=("cone", "cylinder", "wedge"), phases=(0.0, 180.0), forces=(0.96, 9.6, 30.0)
+    )
 
 
 @pytest.fixture(scope="module")
@@ -39,8 +40,12 @@ def sdof_branches():
     from workbench.hbm import frequency_response
 
     ex = sdof_jenkins()
-    return [frequency_response(ex.system, ex.f1, lev, ex.band_hz, ex.outputs,
-                               harmonics=(0, 1, 3), nt=32) for lev in (0.2, 2.0)]
+    return [
+        frequency_response(
+            ex.system, ex.f1, lev, ex.band_hz, ex.outputs, harmonics=(0, 1, 3), nt=32
+        )
+        for lev in (0.2, 2.0)
+    ]
 
 
 def _kinds(study, sdof_branches):
@@ -48,16 +53,31 @@ def _kinds(study, sdof_branches):
     fam = study.select(phase_deg=0.0)
     sweep = synthetic_sweep("cf", (500.0, 1000.0, 5000.0), dampers=("cone",), phases=(180.0,))
     t = [11.76, 11.78, 11.80]
-    errs = {q: {"in-phase 30 N": [2.0, 0.1, 0.0]} for q in
-            ("peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj")}
-    pts = [dict(label=f"nt={n}", group="nt", time_s=x, peak_amplitude_mm=e,
-                peak_frequency_hz=e, friction_energy_mj=e, worst=e)
-           for n, x, e in zip((16, 64, 256), t, (2.0, 0.1, 0.0), strict=True)]
+    errs = {
+        q: {"in-phase 30 N": [2.0, 0.1, 0.0]}
+        for q in ("peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj")
+    }
+    pts = [
+        dict(
+            label=f"nt={n}",
+            group="nt",
+            time_s=x,
+            peak_amplitude_mm=e,
+            peak_frequency_hz=e,
+            friction_energy_mj=e,
+            worst=e,
+        )
+        for n, x, e in zip((16, 64, 256), t, (2.0, 0.1, 0.0), strict=True)
+    ]
     f = np.linspace(80, 170, 40)
-    check = dict(model="sdof", n_dofs=1, freq_hz=f, amp=1e-4 / (1 + ((f - 120) / 8) ** 2),
-                 stable=np.ones(40, bool),
-                 points=[dict(freq_hz=120.0, ti_amplitude=1e-4, ti_converged=True,
-                              diff_pct=0.1)])
+    check = dict(
+        model="sdof",
+        n_dofs=1,
+        freq_hz=f,
+        amp=1e-4 / (1 + ((f - 120) / 8) ** 2),
+        stable=np.ones(40, bool),
+        points=[dict(freq_hz=120.0, ti_amplitude=1e-4, ti_converged=True, diff_pct=0.1)],
+    )
     return {
         "receptances": lambda p: sf.plot_receptances(cases, p, forces=study.forces),
         "receptance_overlay": lambda p: sf.plot_receptance_overlay(fam, p),
@@ -75,9 +95,21 @@ def _kinds(study, sdof_branches):
     }
 
 
-KINDS = ("receptances", "receptance_overlay", "peak_vs_force", "energy_vs_force", "status_map",
-         "status_shares", "sweep", "sweep_receptances", "frf", "frf_status", "fidelity_knob",
-         "fidelity_pareto", "hbm_vs_time")
+KINDS = (
+    "receptances",
+    "receptance_overlay",
+    "peak_vs_force",
+    "energy_vs_force",
+    "status_map",
+    "status_shares",
+    "sweep",
+    "sweep_receptances",
+    "frf",
+    "frf_status",
+    "fidelity_knob",
+    "fidelity_pareto",
+    "hbm_vs_time",
+)
 
 
 @pytest.mark.parametrize("kind", KINDS)

@@ -22,8 +22,9 @@ LOW, MID, HIGH = 3.84, 15.0, 30.0
 @pytest.fixture(scope="module")
 def results(tmp_path_factory) -> StudyResults:
     out = tmp_path_factory.mktemp("findings")
-    r = run_upd("study", ROOT / "tests" / "studies" / "findings.toml", "--out", out, "--json",
-                timeout=1500)
+    r = run_upd(
+        "study", ROOT / "tests" / "studies" / "findings.toml", "--out", out, "--json", timeout=1500
+    )
     assert r.code == 0, r
     assert r.json["n_cases"] == 18
     return StudyResults.load(out / "results.h5")

@@ -105,8 +105,16 @@ def test_curved_damper_volume_converges_at_the_rate_of_quadratic_geometry(tmp_pa
     """Halving the damper size cuts the volume error by 2^3 or more (P2 surface, order >= 3)."""
     errs = []
     for h in (6.0, 3.0):
-        ov = {"rig": {"mesh": {"size_mm": 10.0, "contact_size_mm": 6.0,
-                               "damper_size_mm": h, "refine_distance_mm": 1.0}}}
+        ov = {
+            "rig": {
+                "mesh": {
+                    "size_mm": 10.0,
+                    "contact_size_mm": 6.0,
+                    "damper_size_mm": h,
+                    "refine_distance_mm": 1.0,
+                }
+            }
+        }
         geo = build_geometry("cylinder", tmp_path / f"h{h}", overrides=ov)
         errs.append(abs(geo.stats["damper_volume_rel_error"]))
     rate = math.log2(errs[0] / errs[1])
@@ -120,8 +128,11 @@ def test_rig_volume_matches_its_blocks(built):
     vol = sum(b.dx * b.dy * b.dz for b in boxes)
     for poly in lay.platform_xz:
         x, z = poly[:, 0], poly[:, 1]
-        vol += 0.5 * abs(np.dot(x, np.roll(z, -1)) - np.dot(z, np.roll(x, -1))) * (
-            lay.platform_y[1] - lay.platform_y[0])
+        vol += (
+            0.5
+            * abs(np.dot(x, np.roll(z, -1)) - np.dot(z, np.roll(x, -1)))
+            * (lay.platform_y[1] - lay.platform_y[0])
+        )
     # all faces are flat: exact up to the round-off of the mm -> m scaling
     assert mesh_file_info(geo.rig_msh).volume == pytest.approx(vol * 1e-9, rel=1e-9)
 
@@ -129,12 +140,26 @@ def test_rig_volume_matches_its_blocks(built):
 def test_physical_groups_in_msh_and_xdmf(built):
     geo = built("wedge")
     rig = mesh_file_info(geo.rig_msh)
-    assert set(rig.groups) == {"base", "blade_1", "blade_2", "clamped", "contact_face_1",
-                               "contact_face_2", "contact_nodes_1", "contact_nodes_2",
-                               "excitation", "response"}
+    assert set(rig.groups) == {
+        "base",
+        "blade_1",
+        "blade_2",
+        "clamped",
+        "contact_face_1",
+        "contact_face_2",
+        "contact_nodes_1",
+        "contact_nodes_2",
+        "excitation",
+        "response",
+    }
     dam = mesh_file_info(geo.damper_msh)
-    assert set(dam.groups) == {"damper", "contact_face_1", "contact_face_2",
-                               "contact_nodes_1", "contact_nodes_2"}
+    assert set(dam.groups) == {
+        "damper",
+        "contact_face_1",
+        "contact_face_2",
+        "contact_nodes_1",
+        "contact_nodes_2",
+    }
     cone = mesh_file_info(built("cone").damper_msh)
     assert set(cone.groups) == {"damper", "contact_nodes_1", "contact_nodes_2"}
     assert len(rig.point_groups["excitation"]) == 2
@@ -174,7 +199,8 @@ def test_read_msh_gives_a_dolfinx_mesh_with_the_contact_vertices(built):
     r = read_msh(geo.rig_msh)
     assert set(np.unique(r.cell_tags.values)) == {1, 2, 3}
     assert {r.groups[n][1] for n in ("clamped", "contact_face_1", "contact_face_2")} == set(
-        np.unique(r.facet_tags.values))
+        np.unique(r.facet_tags.values)
+    )
 
 
 def test_record_roundtrip_and_cache(tmp_path):

@@ -32,8 +32,18 @@ print(json.dumps({"rank": MPI.COMM_WORLD.rank, "digest": g.digest, "pairs": g.co
 @pytest.mark.skipif(shutil.which("mpirun") is None, reason="mpirun is not installed")
 def test_two_ranks_share_one_build(tmp_path):
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
-    cmd = ["mpirun", "-n", "2", "--oversubscribe", "-x", "OMP_NUM_THREADS=1",
-           sys.executable, "-c", SCRIPT, str(tmp_path)]
+    cmd = [
+        "mpirun",
+        "-n",
+        "2",
+        "--oversubscribe",
+        "-x",
+        "OMP_NUM_THREADS=1",
+        sys.executable,
+        "-c",
+        SCRIPT,
+        str(tmp_path),
+    ]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
     assert p.returncode == 0, p.stderr[-3000:]
     rows = [json.loads(line) for line in p.stdout.splitlines() if line.startswith("{")]

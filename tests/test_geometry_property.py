@@ -50,14 +50,23 @@ def cases(draw):
     thickness = draw(_f(8.0, 25.0))
     rig = {
         "blade": {"gap_mm": gap, "thickness_mm": thickness},
-        "platform": {"angle_deg": beta, "overhang_mm": overhang,
-                     "tip_thickness_mm": draw(_f(0.3, 10.0)),
-                     "top_below_tip_mm": draw(step(20.0)),
-                     "width_mm": 50.0 + 2 * draw(step(10.0)) * draw(st.sampled_from([-1, 1]))},
-        "base": {"length_mm": gap + 2 * thickness + 2 * draw(step(20.0)),
-                 "width_mm": 50.0 + 2 * draw(step(10.0))},
-        "mesh": {"size_mm": draw(_f(8.0, 14.0)), "contact_size_mm": draw(_f(1.5, 4.0)),
-                 "damper_size_mm": draw(_f(3.0, 8.0)), "refine_distance_mm": draw(_f(4.0, 15.0))},
+        "platform": {
+            "angle_deg": beta,
+            "overhang_mm": overhang,
+            "tip_thickness_mm": draw(_f(0.3, 10.0)),
+            "top_below_tip_mm": draw(step(20.0)),
+            "width_mm": 50.0 + 2 * draw(step(10.0)) * draw(st.sampled_from([-1, 1])),
+        },
+        "base": {
+            "length_mm": gap + 2 * thickness + 2 * draw(step(20.0)),
+            "width_mm": 50.0 + 2 * draw(step(10.0)),
+        },
+        "mesh": {
+            "size_mm": draw(_f(8.0, 14.0)),
+            "contact_size_mm": draw(_f(1.5, 4.0)),
+            "damper_size_mm": draw(_f(3.0, 8.0)),
+            "refine_distance_mm": draw(_f(4.0, 15.0)),
+        },
     }
     b = math.radians(beta)
     s_tip, s_root = (gap / 2 - overhang) / math.sin(b), gap / 2 / math.sin(b)
@@ -71,21 +80,35 @@ def cases(draw):
         alpha = draw(_f(1.0, min(40.0, beta + 5.0)))
         a = math.radians(alpha)
         r1 = sig1 * math.tan(b) * math.cos(a)
-        shape = {"semi_angle_deg": alpha, "r1_mm": max(r1, 0.5), "length_mm": length,
-                 "n_contact_points": n}
+        shape = {
+            "semi_angle_deg": alpha,
+            "r1_mm": max(r1, 0.5),
+            "length_mm": length,
+            "n_contact_points": n,
+        }
     elif kind == "cylinder":
-        shape = {"radius_mm": max(sig1 * math.tan(b), 0.5), "length_mm": length,
-                 "n_contact_points": n}
+        shape = {
+            "radius_mm": max(sig1 * math.tan(b), 0.5),
+            "length_mm": length,
+            "n_contact_points": n,
+        }
     else:
-        shape = {"top_width_mm": max(2 * sig1 * math.sin(b), 0.5), "face_width_mm": sig2 - sig1,
-                 "length_mm": length, "skirt_height_mm": draw(step(8.0)),
-                 "n_contact_rows": draw(st.integers(2, 6)),
-                 "n_contact_per_row": draw(st.integers(2, 16))}
+        shape = {
+            "top_width_mm": max(2 * sig1 * math.sin(b), 0.5),
+            "face_width_mm": sig2 - sig1,
+            "length_mm": length,
+            "skirt_height_mm": draw(step(8.0)),
+            "n_contact_rows": draw(st.integers(2, 6)),
+            "n_contact_per_row": draw(st.integers(2, 16)),
+        }
     return rig, {kind: shape}
 
 
-@settings(max_examples=EXAMPLES, deadline=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(
+    max_examples=EXAMPLES,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
 @given(case=cases())
 def test_mesh_or_clear_error(tmp_path_factory, case):
     rig, shape = case

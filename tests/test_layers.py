@@ -45,19 +45,24 @@ def test_layer_never_imports_studies(layer):
     bad = []
     for p in sorted((PKG / layer).glob("*.py")):
         module = ".".join(p.relative_to(PKG.parent).with_suffix("").parts)
-        bad += [f"{p.relative_to(PKG.parent)}:{line}: {mod}"
-                for line, mod in imported_modules(p.read_text(), module) if _is_studies(mod)]
+        bad += [
+            f"{p.relative_to(PKG.parent)}:{line}: {mod}"
+            for line, mod in imported_modules(p.read_text(), module)
+            if _is_studies(mod)
+        ]
     assert not bad, f"workbench/{layer} imports workbench.studies:\n" + "\n".join(bad)
 
 
 def test_the_scan_sees_relative_local_and_package_imports():
     """A check of the check: every way of writing such an import is caught."""
-    src = ("import workbench.studies.spec\n"
-           "from .. import studies\n"
-           "def f():\n"
-           "    from ..studies.spec import BY_NAME\n"
-           "    return BY_NAME\n"
-           "from .common import pyplot\n")
+    src = (
+        "import workbench.studies.spec\n"
+        "from .. import studies\n"
+        "def f():\n"
+        "    from ..studies.spec import BY_NAME\n"
+        "    return BY_NAME\n"
+        "from .common import pyplot\n"
+    )
     mods = imported_modules(src, "workbench.render.x")
     assert sorted({line for line, m in mods if _is_studies(m)}) == [1, 2, 4]
     assert (6, "workbench.render.common") in mods
@@ -67,6 +72,9 @@ MAX_LINES = 600  # a module a newcomer can hold in their head (issue 14)
 
 
 def test_no_module_is_over_600_lines():
-    long = {str(p.relative_to(PKG.parent)): n for p in sorted(PKG.rglob("*.py"))
-            if (n := len(p.read_text().splitlines())) > MAX_LINES}
+    long = {
+        str(p.relative_to(PKG.parent)): n
+        for p in sorted(PKG.rglob("*.py"))
+        if (n := len(p.read_text().splitlines())) > MAX_LINES
+    }
     assert not long, f"modules over {MAX_LINES} lines (split them by concept): {long}"

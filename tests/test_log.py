@@ -57,8 +57,10 @@ def test_numba_does_not_colour_through_colorama():
     escape code to stdout and breaks --json (seen under mpirun)."""
     import subprocess
 
-    code = ("import workbench, numba.core.errors as e; "
-            "assert not hasattr(e, 'ColorShell'), 'numba uses colorama'")
+    code = (
+        "import workbench, numba.core.errors as e; "
+        "assert not hasattr(e, 'ColorShell'), 'numba uses colorama'"
+    )
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert r.stdout == ""

@@ -40,8 +40,9 @@ def jenkins_df(X: np.ndarray, kt: float, fs: float) -> tuple[np.ndarray, np.ndar
 @pytest.fixture(scope="module")
 def jenkins():
     ex = sdof_jenkins()
-    b = nonlinear_mode(ex.system, harmonics=(1,), outputs=[0], relative_range=(0.1, 1000.0),
-                       n_steps=80)  # fine steps near the damping maximum
+    b = nonlinear_mode(
+        ex.system, harmonics=(1,), outputs=[0], relative_range=(0.1, 1000.0), n_steps=80
+    )  # fine steps near the damping maximum
     return ex, b
 
 
@@ -96,8 +97,9 @@ def test_jenkins_backbone_against_describing_function(jenkins):
 def test_epmc_jacobian_finite_differences():
     ex = two_dof_contact()
     p = Epmc(ex.system, Fourier((0, 1, 2, 3)), 0, ex.outputs)
-    b = nonlinear_mode(ex.system, mode=0, harmonics=(0, 1, 2, 3), relative_range=(0.5, 5.0),
-                       n_steps=6)
+    b = nonlinear_mode(
+        ex.system, mode=0, harmonics=(0, 1, 2, 3), relative_range=(0.5, 5.0), n_steps=6
+    )
     i = b.n_points // 2
     assert b.status[i, 0] == 1  # stick-slip: the contact Jacobian is not trivial
     y = np.concatenate([b.psi[i], [2 * np.pi * b.freq_hz[i], b.xi[i]]])
@@ -118,8 +120,9 @@ def _peaks(ex, b, harmonics):
     opts = SolverOptions(stability=False)
     out = []
     for lv in ex.levels:
-        br = frequency_response(ex.system, ex.f1, lv, ex.band_hz, ex.outputs,
-                                harmonics=harmonics, options=opts)
+        br = frequency_response(
+            ex.system, ex.f1, lv, ex.band_hz, ex.outputs, harmonics=harmonics, options=opts
+        )
         i = br.peak(0)
         out.append((br.freq_hz[i], br.out_amp[i, 0], synthesize(b, ex.f1, lv, 0)))
     return out
@@ -146,8 +149,9 @@ def test_two_dof_synthesis_against_full_hbm():
     """
     ex = two_dof_contact()
     H = (0, 1, 2, 3)
-    b = nonlinear_mode(ex.system, f1=ex.f1, band_hz=ex.band_hz, harmonics=H,
-                       outputs=ex.outputs, levels=ex.levels)
+    b = nonlinear_mode(
+        ex.system, f1=ex.f1, band_hz=ex.band_hz, harmonics=H, outputs=ex.outputs, levels=ex.levels
+    )
     assert b.completed, b.message
     assert b.mode == 0
     assert b.freq_hz[0] == pytest.approx(b.linear_hz[0], rel=1e-9)
@@ -180,8 +184,9 @@ def test_invalid_synthesis_is_detected():
     s = synthesize(b, f1, 0.5, 0)
     assert not s.valid
     assert any("folds" in r for r in s.reasons)
-    br = frequency_response(sysm, f1, 0.5, (45.0, 150.0), [0], harmonics=H,
-                            options=SolverOptions(stability=False))
+    br = frequency_response(
+        sysm, f1, 0.5, (45.0, 150.0), [0], harmonics=H, options=SolverOptions(stability=False)
+    )
     err = abs(s.peak_amplitude / br.out_amp[br.peak(0), 0] - 1)
     assert err > 0.05
 
@@ -205,8 +210,9 @@ def test_condensed_form_matches_all_dofs():
 
     ex = line_damper_rig(n_per_line=3)
     mode = pick_mode(ex.system, ex.f1, ex.band_hz)
-    kw = dict(mode=mode, harmonics=(0, 1, 3), outputs=ex.outputs, relative_range=(0.8, 1.8),
-              n_steps=6)
+    kw = dict(
+        mode=mode, harmonics=(0, 1, 3), outputs=ex.outputs, relative_range=(0.8, 1.8), n_steps=6
+    )
     bc = nonlinear_mode(ex.system, space="condensed", **kw)
     bp = nonlinear_mode(ex.system, space="physical", **kw)
     assert bc.n_points > 5 and bp.n_points > 5

@@ -83,9 +83,7 @@ def _same_system(m, ref, rtol=RTOL):
         a = a.toarray() if sp.issparse(a) else a
         b = b.toarray() if sp.issparse(b) else b
         np.testing.assert_allclose(a, b, rtol=rtol, atol=rtol * np.abs(b).max())
-    np.testing.assert_array_equal(
-        m.system.contacts.W.toarray(), ref.system.contacts.W.toarray()
-    )
+    np.testing.assert_array_equal(m.system.contacts.W.toarray(), ref.system.contacts.W.toarray())
     np.testing.assert_array_equal(m.outputs, ref.outputs)
     np.testing.assert_array_equal(m.f1, ref.f1)
 
@@ -108,13 +106,15 @@ def test_op4_with_dof_map(tmp_path):
     write_op4(
         tmp_path / "m.op4",
         {"MAAX": Matrix("MAAX", 6, data=M), "KAAX": Matrix("KAAX", 6, data=sp.coo_matrix(K))},
-        is_binary=False, precision="double",
+        is_binary=False,
+        precision="double",
     )
     mats = readers.read_op4(tmp_path / "m.op4")
     np.testing.assert_allclose(mats["KAAX"].toarray(), K, rtol=RTOL)
     _write_dof_map(tmp_path / "dofs.txt")
-    p = _toml(tmp_path, 'matrices = "m.op4"\nmass = "MAAX"\nstiffness = "KAAX"\n'
-                        'dof_map = "dofs.txt"')
+    p = _toml(
+        tmp_path, 'matrices = "m.op4"\nmass = "MAAX"\nstiffness = "KAAX"\ndof_map = "dofs.txt"'
+    )
     _same_system(load_frf_model(p), _reference(tmp_path))
 
 
@@ -182,19 +182,24 @@ def test_matrix_market_and_harwell_boeing_with_ansys_mapping(tmp_path):
     text[2] = "RSA" + text[2][3:]
     (tmp_path / "K.rsa").write_text("".join(text))
     assert readers.file_kind(tmp_path / "K.mtx") == "mm"
-    np.testing.assert_allclose(readers.read_harwell_boeing(tmp_path / "K.rsa").toarray(), K,
-                               rtol=1e-7)  # scipy's hb_write prints 8 significant digits
+    np.testing.assert_allclose(
+        readers.read_harwell_boeing(tmp_path / "K.rsa").toarray(), K, rtol=1e-7
+    )  # scipy's hb_write prints 8 significant digits
     _write_dof_map(tmp_path / "full.mapping", ansys=True)
     ref = _reference(tmp_path)
     for mass, stiff, rtol in (("M.mm", "K.mtx", RTOL), ("M.rua", "K.rsa", 1e-7)):
-        p = _toml(tmp_path, f'matrices = ""\nmass = "{mass}"\nstiffness = "{stiff}"\n'
-                            'dof_map = "full.mapping"')
+        p = _toml(
+            tmp_path,
+            f'matrices = ""\nmass = "{mass}"\nstiffness = "{stiff}"\ndof_map = "full.mapping"',
+        )
         got = load_frf_model(p)
-        np.testing.assert_allclose(_dense(got.system.K), ref.system.K, rtol=rtol,
-                                   atol=rtol * np.abs(ref.system.K).max())
+        np.testing.assert_allclose(
+            _dense(got.system.K), ref.system.K, rtol=rtol, atol=rtol * np.abs(ref.system.K).max()
+        )
         np.testing.assert_allclose(_dense(got.system.M), ref.system.M, rtol=rtol)
-        np.testing.assert_array_equal(got.system.contacts.W.toarray(),
-                                      ref.system.contacts.W.toarray())
+        np.testing.assert_array_equal(
+            got.system.contacts.W.toarray(), ref.system.contacts.W.toarray()
+        )
 
 
 def _mmwrite(path: Path, A, **kw) -> None:
@@ -210,8 +215,11 @@ def _dense(a):
     "model, edit, param",
     [
         ('matrices = "m.npz"', ("nodes = [11]", "nodes = [12]"), "contact[0].nodes"),
-        ('matrices = "m.npz"', ("components = [1, 2, 3]", "components = [1, 2, 7]"),
-         "contact[0].components"),
+        (
+            'matrices = "m.npz"',
+            ("components = [1, 2, 3]", "components = [1, 2, 7]"),
+            "contact[0].components",
+        ),
         ('matrices = "m.npz"', ('dof_map = "dofs.txt"', ""), "contact[0].nodes"),
         ('matrices = "m.npz"', ('"UZ"', '"UW"'), "output.dofs[1]"),
         ('matrices = ""\nmass = "M.mm"\nstiffness = "nope.mm"', None, "model.stiffness"),
@@ -225,8 +233,11 @@ def test_reader_errors_name_the_key(tmp_path, model, edit, param):
     M, K = _model()
     np.savez(tmp_path / "m.npz", M=M, K=K)
     _mmwrite(tmp_path / "M.mm", M)
-    write_op4(tmp_path / "m.op4", {"MAAX": Matrix("MAAX", 2, data=M),
-                                   "KAAX": Matrix("KAAX", 2, data=K)}, is_binary=False)
+    write_op4(
+        tmp_path / "m.op4",
+        {"MAAX": Matrix("MAAX", 2, data=M), "KAAX": Matrix("KAAX", 2, data=K)},
+        is_binary=False,
+    )
     _write_dof_map(tmp_path / "dofs.txt")
     text = "[model]\n" + model + '\ndof_map = "dofs.txt"' + TAIL.format(**BY_NODE)
     if edit:
@@ -239,7 +250,9 @@ def test_reader_errors_name_the_key(tmp_path, model, edit, param):
 
 
 def test_abaqus_mixed_triangles_refused(tmp_path):
-    (tmp_path / "k.mtx").write_text("1,1, 1,1, 2.0\n2,1, 1,1, -1.0\n1,1, 2,1, -1.0\n"
-                                    "2,1, 3,1, -1.0\n3,1, 3,1, 2.0\n2,1, 2,1, 2.0\n")
+    (tmp_path / "k.mtx").write_text(
+        "1,1, 1,1, 2.0\n2,1, 1,1, -1.0\n1,1, 2,1, -1.0\n"
+        "2,1, 3,1, -1.0\n3,1, 3,1, 2.0\n2,1, 2,1, 2.0\n"
+    )
     with pytest.raises(InputError, match="mirror"):
         readers.read_abaqus_mtx(tmp_path / "k.mtx")

@@ -13,8 +13,14 @@ import numpy as np
 from tests.conftest import run_upd
 
 CHROMIUM_FLAGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
 ]
 
 
@@ -38,19 +44,30 @@ def _study_dir(root: Path) -> Path:
     plt.close("all")
     (root / "tables" / "peaks.csv").write_text("damper,peak (mm)\ncone,0.087\nwedge,0.35\n")
     (root / "tables" / "energy.md").write_text(
-        "| damper | energy (mJ) |\n|---|---|\n| cone | 0.22 |\n")
+        "| damper | energy (mJ) |\n|---|---|\n| cone | 0.22 |\n"
+    )
     manifest = {
-        "title": "Test study", "summary": ["a headline"],
+        "title": "Test study",
+        "summary": ["a headline"],
         "sections": [
-            {"id": "a", "title": "First", "text": ["words <b>escaped</b>"],
-             "figures": [{"path": "figures/first.png", "caption": "red line"}],
-             "tables": [{"path": "tables/peaks.csv", "caption": "peaks"}]},
-            {"id": "b", "title": "Second",
-             "figures": [{"path": "figures/second.png", "caption": "blue line"}],
-             "tables": [{"path": "tables/energy.md", "caption": "energy"}]},
+            {
+                "id": "a",
+                "title": "First",
+                "text": ["words <b>escaped</b>"],
+                "figures": [{"path": "figures/first.png", "caption": "red line"}],
+                "tables": [{"path": "tables/peaks.csv", "caption": "peaks"}],
+            },
+            {
+                "id": "b",
+                "title": "Second",
+                "figures": [{"path": "figures/second.png", "caption": "blue line"}],
+                "tables": [{"path": "tables/energy.md", "caption": "energy"}],
+            },
         ],
-        "inputs": {"forces": [9.6, 30.0]}, "sources": {"forces": "command line"},
-        "versions": {"numpy": "1.24.2"}, "timings": {"hbm": 1.25},
+        "inputs": {"forces": [9.6, 30.0]},
+        "sources": {"forces": "command line"},
+        "versions": {"numpy": "1.24.2"},
+        "timings": {"hbm": 1.25},
     }
     (root / "manifest.json").write_text(json.dumps(manifest))
     return root
@@ -91,8 +108,12 @@ def _chromium(flags: list[str], url: str, tmp_path: Path, check) -> object:
     out = None
     for attempt in range(3):
         profile = f"--user-data-dir={tmp_path / f'profile{attempt}'}"
-        r = subprocess.run(["chromium", *CHROMIUM_FLAGS, profile, "--virtual-time-budget=10000",
-                            *flags, url], capture_output=True, text=True, timeout=180)
+        r = subprocess.run(
+            ["chromium", *CHROMIUM_FLAGS, profile, "--virtual-time-budget=10000", *flags, url],
+            capture_output=True,
+            text=True,
+            timeout=180,
+        )
         out = check(r.stdout)
         if out:
             return out
@@ -106,8 +127,12 @@ def test_headless_chromium_renders_first_figure(tmp_path):
     assert run_upd("report", d).code == 0
     url = (d / "report.html").as_uri()
     # the page's load handler records the decoded size of the first figure
-    dom = _chromium(["--dump-dom"], url, tmp_path,
-                    lambda out: out if 'data-first-figure="600x400"' in out else None)
+    dom = _chromium(
+        ["--dump-dom"],
+        url,
+        tmp_path,
+        lambda out: out if 'data-first-figure="600x400"' in out else None,
+    )
     assert dom, "chromium never recorded the first figure's decoded size (600x400)"
     import matplotlib.image as mpimg
 
@@ -123,6 +148,5 @@ def test_headless_chromium_renders_first_figure(tmp_path):
         # the first figure's thick pure-red line is on screen (hundreds of pixels)
         return n if n > 500 else 0
 
-    n_red = _chromium(["--window-size=1200,900", f"--screenshot={shot}"], url, tmp_path,
-                      red_pixels)
+    n_red = _chromium(["--window-size=1200,900", f"--screenshot={shot}"], url, tmp_path, red_pixels)
     assert n_red > 500, "the screenshot never showed the first figure's red line"

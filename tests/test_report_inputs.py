@@ -32,8 +32,15 @@ def test_comparison_shows_file_values_with_their_source():
     assert rows["mu"]["value"] == 0.4 and rows["mu"]["source"] == "command line"
     assert rows["modes"]["source"] == "studies/paper.toml"
     # only what a comparison uses
-    for other in ("levels-modes", "methods", "hard-cases", "tolerance", "sweep-values",
-                  "knobs", "peak-tolerance"):
+    for other in (
+        "levels-modes",
+        "methods",
+        "hard-cases",
+        "tolerance",
+        "sweep-values",
+        "knobs",
+        "peak-tolerance",
+    ):
         assert other not in rows
 
 
@@ -43,10 +50,13 @@ def test_sweep_names_the_swept_values_and_wedge_only_face_stiffness():
     assert "kt-face" in rows and "kt-line" not in rows and "cone-angle" not in rows
 
 
-@pytest.mark.parametrize("path, kept, dropped", [
-    ("studies/fidelity.toml", "levels-modes", "methods"),
-    ("studies/robustness.toml", "hard-cases", "levels-modes"),
-])
+@pytest.mark.parametrize(
+    "path, kept, dropped",
+    [
+        ("studies/fidelity.toml", "levels-modes", "methods"),
+        ("studies/robustness.toml", "hard-cases", "levels-modes"),
+    ],
+)
 def test_other_kinds_list_their_own_options(path, kept, dropped):
     rows = _rows(path)
     assert kept in rows and dropped not in rows
@@ -56,8 +66,7 @@ def test_other_kinds_list_their_own_options(path, kept, dropped):
 
 def test_report_table_has_unit_and_source(tmp_path):
     s = load_study(ROOT / "studies/paper.toml")
-    html = render_html({"title": "t", "inputs_used": used_inputs(s.as_dict(), s.source)},
-                       tmp_path)
+    html = render_html({"title": "t", "inputs_used": used_inputs(s.as_dict(), s.source)}, tmp_path)
     assert "<th>unit</th>" in html and "<td>N/m per m</td>" in html
     assert "<td>None</td>" not in html and "default: geometry/contact.toml" in html
 

@@ -41,8 +41,15 @@ def test_every_results_dataset_has_a_documented_unit(tmp_path):
 
 
 def test_reduced_model_units(tmp_path):
-    rm = ReducedModel(name="rig", kind="user", K=np.eye(3) * 1e4, M=np.eye(3), T=np.eye(3),
-                      node_coords=np.zeros((1, 3)), node_sets={"contact": np.array([0])})
+    rm = ReducedModel(
+        name="rig",
+        kind="user",
+        K=np.eye(3) * 1e4,
+        M=np.eye(3),
+        T=np.eye(3),
+        node_coords=np.zeros((1, 3)),
+        node_sets={"contact": np.array([0])},
+    )
     p = rm.save(tmp_path / "rig.h5")
     doc = DOC.read_text()
     with h5py.File(p, "r") as h:

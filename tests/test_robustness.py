@@ -25,16 +25,25 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def _problem(name, ex, level, band=None, harmonics=(0, 1, 2, 3)):
     band = band or ex.band_hz
-    return rb.Problem(name, f"test-{name}-{level}-{band}", level, tuple(harmonics), None,
-                      lambda: (ex.system, ex.f1, band, ex.outputs, ex.output_names))
+    return rb.Problem(
+        name,
+        f"test-{name}-{level}-{band}",
+        level,
+        tuple(harmonics),
+        None,
+        lambda: (ex.system, ex.f1, band, ex.outputs, ex.output_names),
+    )
 
 
 @pytest.fixture(scope="module")
 def jenkins_cells():
     # the friction oscillator at the slip force: stick-slip over the peak, no fold
     p = _problem("jenkins", sdof_jenkins(), 1.0)
-    return rb.method_map([p], ["default", "fd-jacobian", "ls-basic", "tangent-predictor",
-                               "frequency-stepping"], tol_pct=1.0)
+    return rb.method_map(
+        [p],
+        ["default", "fd-jacobian", "ls-basic", "tangent-predictor", "frequency-stepping"],
+        tol_pct=1.0,
+    )
 
 
 def test_methods_agree_on_the_friction_oscillator(jenkins_cells):
@@ -73,14 +82,38 @@ def test_frequency_stepping_fails_at_a_turning_point_and_keeps_its_branch():
 
 def test_a_converged_but_different_peak_is_a_wrong_answer():
     cells = [
-        dict(case="c", method="a", succeeded=True, peak_amplitude=1.0, peak_frequency_hz=10.0,
-             band_hz=[0.0, 20.0]),
-        dict(case="c", method="b", succeeded=True, peak_amplitude=0.97, peak_frequency_hz=10.0,
-             band_hz=[0.0, 20.0]),
-        dict(case="c", method="d", succeeded=True, peak_amplitude=1.004, peak_frequency_hz=11.0,
-             band_hz=[0.0, 20.0]),
-        dict(case="c", method="e", succeeded=False, peak_amplitude=0.5, peak_frequency_hz=5.0,
-             band_hz=[0.0, 20.0]),
+        dict(
+            case="c",
+            method="a",
+            succeeded=True,
+            peak_amplitude=1.0,
+            peak_frequency_hz=10.0,
+            band_hz=[0.0, 20.0],
+        ),
+        dict(
+            case="c",
+            method="b",
+            succeeded=True,
+            peak_amplitude=0.97,
+            peak_frequency_hz=10.0,
+            band_hz=[0.0, 20.0],
+        ),
+        dict(
+            case="c",
+            method="d",
+            succeeded=True,
+            peak_amplitude=1.004,
+            peak_frequency_hz=11.0,
+            band_hz=[0.0, 20.0],
+        ),
+        dict(
+            case="c",
+            method="e",
+            succeeded=False,
+            peak_amplitude=0.5,
+            peak_frequency_hz=5.0,
+            band_hz=[0.0, 20.0],
+        ),
     ]
     rb.classify(cells, "a", 1.0)
     assert [c["status"] for c in cells] == ["ok", "wrong", "ok", "failed"]
@@ -96,10 +129,14 @@ def test_turning_points_are_sign_changes_of_the_frequency_increment():
 
 def test_time_integration_is_compared_with_the_nearest_coexisting_solution():
     # a folded branch: three solutions at f = 2 (amplitudes 1, 2 and 3)
-    check = {"freq_hz": [1.0, 3.0, 1.5, 3.0], "amp": [0.0, 2.0, 3.0, 4.0],
-             "points": [{"freq_hz": 2.0, "hbm_amplitude": 1.0, "ti_amplitude": 3.03}]}
-    assert sorted(rb.branch_amplitudes_at(check["freq_hz"], check["amp"], 2.0)) == \
-        pytest.approx([1.0, 2.0 + 2.0 / 3.0, 3.0 + 1.0 / 3.0])
+    check = {
+        "freq_hz": [1.0, 3.0, 1.5, 3.0],
+        "amp": [0.0, 2.0, 3.0, 4.0],
+        "points": [{"freq_hz": 2.0, "hbm_amplitude": 1.0, "ti_amplitude": 3.03}],
+    }
+    assert sorted(rb.branch_amplitudes_at(check["freq_hz"], check["amp"], 2.0)) == pytest.approx(
+        [1.0, 2.0 + 2.0 / 3.0, 3.0 + 1.0 / 3.0]
+    )
     rb.compare_with_branch(check)
     r = check["points"][0]
     assert r["nearest_hbm_amplitude"] == pytest.approx(3.0 + 1.0 / 3.0)
@@ -142,10 +179,13 @@ def test_registry_matches_the_study_options():
     assert rb.method_options("fixed-step").ds_min == rb.method_options("fixed-step").ds_max
 
 
-@pytest.mark.parametrize("key,value,param", [
-    ("methods", ["default", "newton-raphson"], "methods[1]"),
-    ("hard-cases", "near-separation,moon-landing", "hard-cases[1]"),
-])
+@pytest.mark.parametrize(
+    "key,value,param",
+    [
+        ("methods", ["default", "newton-raphson"], "methods[1]"),
+        ("hard-cases", "near-separation,moon-landing", "hard-cases[1]"),
+    ],
+)
 def test_unknown_names_are_input_errors(key, value, param):
     with pytest.raises(InputError) as e:
         resolve({"kind": "robustness", key: value})
@@ -153,8 +193,9 @@ def test_unknown_names_are_input_errors(key, value, param):
 
 
 def test_cli_unknown_method_is_one_line_exit_2(tmp_path):
-    r = run_upd("study", "--kind", "robustness", "--methods", "default,nope", "--out", tmp_path,
-                timeout=120)
+    r = run_upd(
+        "study", "--kind", "robustness", "--methods", "default,nope", "--out", tmp_path, timeout=120
+    )
     assert r.code == 2, r.err
     lines = [ln for ln in r.err.strip().splitlines() if ln.strip()]
     assert len(lines) == 1 and "methods[1]" in lines[0] and "nope" in lines[0]
@@ -165,8 +206,14 @@ def test_study_help_lists_the_robustness_options():
     assert r.code == 0
     text = re.sub(r"-\s+", "-", r.out)  # argparse wraps lines after hyphens
     assert "robustness options" in text
-    for word in ("--methods", "--hard-cases", "--peak-tolerance", "--time-check",
-                 *rb.METHODS, *rb.CASES):
+    for word in (
+        "--methods",
+        "--hard-cases",
+        "--peak-tolerance",
+        "--time-check",
+        *rb.METHODS,
+        *rb.CASES,
+    ):
         assert word in text, word
 
 
@@ -183,9 +230,17 @@ def test_time_integration_confirms_the_light_damping_peak():
 def test_study_end_to_end_on_one_rig_case(tmp_path):
     from workbench.studies.robustness import run_robustness
 
-    spec = resolve({"kind": "robustness", "name": "rob", "methods": ["default", "ls-basic"],
-                    "hard-cases": ["high-force"], "time-check": False, "mesh-size": 14.0,
-                    "geometry": str(ROOT / "studies" / "robustness_geometry.toml")})
+    spec = resolve(
+        {
+            "kind": "robustness",
+            "name": "rob",
+            "methods": ["default", "ls-basic"],
+            "hard-cases": ["high-force"],
+            "time-check": False,
+            "mesh-size": 14.0,
+            "geometry": str(ROOT / "studies" / "robustness_geometry.toml"),
+        }
+    )
     s = run_robustness(spec, tmp_path)
     assert s["reference_failed"] == []
     assert {c["method"] for c in s["cells"]} == {"default", "ls-basic"}
@@ -216,13 +271,25 @@ def test_every_accepted_point_is_a_solution(method, model):
     from workbench.hbm.examples import two_dof_contact
     from workbench.hbm.fourier import Fourier
 
-    ex, level, harm = ((sdof_jenkins(), 1.0, (0, 1, 2, 3)) if model == "jenkins"
-                       else (two_dof_contact(zeta=0.005), 3.0, tuple(range(6))))
+    ex, level, harm = (
+        (sdof_jenkins(), 1.0, (0, 1, 2, 3))
+        if model == "jenkins"
+        else (two_dof_contact(zeta=0.005), 3.0, tuple(range(6)))
+    )
     opts = rb.method_options(method)
-    b = frequency_response(ex.system, ex.f1, level, ex.band_hz, outputs=ex.outputs,
-                           harmonics=harm, options=opts)
-    hb = HarmonicBalance(ex.system, ex.f1, Fourier(b.harmonics, b.nt), ex.outputs, level,
-                         opts.space, opts.backend, opts.dc_anchor)
+    b = frequency_response(
+        ex.system, ex.f1, level, ex.band_hz, outputs=ex.outputs, harmonics=harm, options=opts
+    )
+    hb = HarmonicBalance(
+        ex.system,
+        ex.f1,
+        Fourier(b.harmonics, b.nt),
+        ex.outputs,
+        level,
+        opts.space,
+        opts.backend,
+        opts.dc_anchor,
+    )
     if method == "default":
         assert b.n_points > 10 and not b.failed, b.message
     else:
@@ -231,9 +298,10 @@ def test_every_accepted_point_is_a_solution(method, model):
         # of convergence. What this test asserts is that every point it did accept solves
         # the balance, so it only needs some points to check.
         assert b.n_points >= 5, b.message
-    worst = max(np.abs(hb.residual(x, 2 * np.pi * f)).max() / max(np.abs(x).max(),
-                                                                  b.stats["u_ref_m"])
-                for x, f in zip(b.x, b.freq_hz, strict=True))
+    worst = max(
+        np.abs(hb.residual(x, 2 * np.pi * f)).max() / max(np.abs(x).max(), b.stats["u_ref_m"])
+        for x, f in zip(b.x, b.freq_hz, strict=True)
+    )
     # the corrector's tolerance (relative); points accepted on a stall at a kink are counted
     # and may reach tol_stall
     limit = opts.tol if b.stats["n_stalled"] == 0 else opts.tol_stall
@@ -242,16 +310,42 @@ def test_every_accepted_point_is_a_solution(method, model):
 
 
 def test_report_text_names_each_failure_and_how_far_it_got():
-    spec = resolve({"kind": "robustness", "methods": ["default", "fixed-step"],
-                    "hard-cases": ["high-force"], "time-check": False})
-    base = dict(case="high-force", band_hz=[300.0, 400.0], n_points=12, newton_its=40,
-                wall_s=0.1, stable=[True] * 12)
+    spec = resolve(
+        {
+            "kind": "robustness",
+            "methods": ["default", "fixed-step"],
+            "hard-cases": ["high-force"],
+            "time-check": False,
+        }
+    )
+    base = dict(
+        case="high-force",
+        band_hz=[300.0, 400.0],
+        n_points=12,
+        newton_its=40,
+        wall_s=0.1,
+        stable=[True] * 12,
+    )
     cells = [
-        dict(base, method="default", succeeded=True, peak_amplitude=1.0,
-             peak_frequency_hz=350.0, energy_residual_max=1e-9),
-        dict(base, method="fixed-step", succeeded=False, failed=True,
-             message="the corrector failed at f = 340 Hz", freq_reached_hz=340.0,
-             band_fraction=0.4, peak_amplitude=0.5, peak_frequency_hz=340.0),
+        dict(
+            base,
+            method="default",
+            succeeded=True,
+            peak_amplitude=1.0,
+            peak_frequency_hz=350.0,
+            energy_residual_max=1e-9,
+        ),
+        dict(
+            base,
+            method="fixed-step",
+            succeeded=False,
+            failed=True,
+            message="the corrector failed at f = 340 Hz",
+            freq_reached_hz=340.0,
+            band_fraction=0.4,
+            peak_amplitude=0.5,
+            peak_frequency_hz=340.0,
+        ),
     ]
     rb.classify(cells, "default", 1.0)
     secs = rb._sections(spec, cells, [], {})

@@ -28,8 +28,9 @@ def ex():
 
 def test_runup_reaches_the_dense_reference(ex):
     f = 140.0
-    tr = time_response(ex.system, ex.f1, 4.0, f, [0, 1], harmonics=(0, 1), steps_per_period=256,
-                       tol=1e-10)
+    tr = time_response(
+        ex.system, ex.f1, 4.0, f, [0, 1], harmonics=(0, 1), steps_per_period=256, tol=1e-10
+    )
     ru = runup(ex.system, ex.f1, 4.0, f, [0, 1], periods=tr.periods, steps_per_period=256)
     h1_ref = tr.h1_amplitude
     assert np.all(np.abs(ru.h1[-1] / h1_ref - 1) < 1e-6), (ru.h1[-1], h1_ref)
@@ -49,8 +50,9 @@ def test_a_continued_runup_equals_one_run(ex):
 
 def test_a_ramped_start_reaches_the_same_slipping_orbit(ex):
     sudden = runup(ex.system, ex.f1, 4.0, 140.0, [0], periods=150, steps_per_period=128)
-    ramped = runup(ex.system, ex.f1, 4.0, 140.0, [0], periods=150, steps_per_period=128,
-                   ramp_periods=20)
+    ramped = runup(
+        ex.system, ex.f1, 4.0, 140.0, [0], periods=150, steps_per_period=128, ramp_periods=20
+    )
     assert sudden.slip_samples[-1] > 0
     assert abs(ramped.h1[-1, 0] / sudden.h1[-1, 0] - 1) < 1e-6
 

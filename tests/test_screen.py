@@ -20,9 +20,17 @@ def two_dof(k=4.0e6, kt=1.5e6, kn=3.0e6, m1=1.0, m2=0.2, mu=0.5, n0=10.0) -> Lin
     [[k + kt, -kt], [-kt, kt + kn]] and sliding [[k, 0], [0, kn]].
     """
     W = sp.csr_matrix(np.array([[-1.0, 1.0], [0.0, 0.0], [0.0, 1.0]]))
-    return LinearPair(M=np.diag([m1, m2]), K=np.diag([k, 0.0]), W=W, kt=np.array([kt]),
-                      kn=np.array([kn]), mu=np.array([mu]), n0=np.array([n0]),
-                      f1=np.array([1.0 + 0j, 0.0]), r=np.array([1.0, 0.0]))
+    return LinearPair(
+        M=np.diag([m1, m2]),
+        K=np.diag([k, 0.0]),
+        W=W,
+        kt=np.array([kt]),
+        kn=np.array([kn]),
+        mu=np.array([mu]),
+        n0=np.array([n0]),
+        f1=np.array([1.0 + 0j, 0.0]),
+        r=np.array([1.0, 0.0]),
+    )
 
 
 def test_k2_over_k_of_a_two_dof_model_matches_its_closed_form():
@@ -30,8 +38,12 @@ def test_k2_over_k_of_a_two_dof_model_matches_its_closed_form():
     res = screen(two_dof(k, kt, kn, m1, m2), 0.002)
     # stuck: the blade-dominated root of det([[k+kt - w2 m1, -kt], [-kt, kt+kn - w2 m2]]) = 0
     a, b, c = m1 * m2, -((k + kt) * m2 + (kt + kn) * m1), (k + kt) * (kt + kn) - kt**2
-    roots = sorted([(-b - math.sqrt(b * b - 4 * a * c)) / (2 * a),
-                    (-b + math.sqrt(b * b - 4 * a * c)) / (2 * a)])
+    roots = sorted(
+        [
+            (-b - math.sqrt(b * b - 4 * a * c)) / (2 * a),
+            (-b + math.sqrt(b * b - 4 * a * c)) / (2 * a),
+        ]
+    )
     w2_stuck = roots[0]  # the lower mode is the blade's (its receptance at x1 dominates)
     w2_slide = k / m1  # sliding: the blade alone; the damper on kn is another mode
     assert res.f_stuck_hz == pytest.approx(math.sqrt(w2_stuck) / (2 * math.pi), rel=1e-10)
@@ -54,9 +66,17 @@ def test_rigid_coupling_bound_exceeds_the_soft_coupling():
 def sdof(k=1.0e6, kt=1.0e6, m=1.0, mu=0.5, n0=20.0) -> LinearPair:
     """One mass on spring k with a Jenkins element (stiffness kt) to the ground."""
     W = sp.csr_matrix(np.array([[1.0], [0.0], [0.0]]))
-    return LinearPair(M=np.array([[m]]), K=np.array([[k]]), W=W, kt=np.array([kt]),
-                      kn=np.array([0.0]), mu=np.array([mu]), n0=np.array([n0]),
-                      f1=np.array([1.0 + 0j]), r=np.array([1.0]))
+    return LinearPair(
+        M=np.array([[m]]),
+        K=np.array([[k]]),
+        W=W,
+        kt=np.array([kt]),
+        kn=np.array([0.0]),
+        mu=np.array([mu]),
+        n0=np.array([n0]),
+        f1=np.array([1.0 + 0j]),
+        r=np.array([1.0]),
+    )
 
 
 def test_slip_onset_of_a_single_dof_is_its_linear_peak_force():
@@ -104,14 +124,24 @@ def test_single_mode_rule_against_the_harmonic_balance_of_a_jenkins_oscillator()
     ex = sdof_jenkins(m=0.1, f_free_hz=100.0, kt_ratio=1.0, mu=0.5, n0=2.0, zeta=0.005)
     s = ex.system
     el = s.contacts
-    lp = LinearPair(M=s.M, K=s.K, W=el.W, kt=el.kt1, kn=el.kn, mu=el.mu, n0=el.n0,
-                    f1=np.asarray(ex.f1, complex), r=np.array([1.0]))
+    lp = LinearPair(
+        M=s.M,
+        K=s.K,
+        W=el.W,
+        kt=el.kt1,
+        kn=el.kn,
+        mu=el.mu,
+        n0=el.n0,
+        f1=np.asarray(ex.f1, complex),
+        r=np.array([1.0]),
+    )
     res = screen(lp, 0.005)
     assert res.k2_over_k == pytest.approx(0.5, rel=1e-9)
     for factor, tol in ((1.5, 0.005), (20.0, 0.005), (40.0, 0.02), (80.0, None)):
         force = factor * res.f_slip_n
-        br = frequency_response(s, ex.f1, force, (80.0, 160.0), outputs=[0],
-                                harmonics=(1, 3, 5), nt=128)
+        br = frequency_response(
+            s, ex.f1, force, (80.0, 160.0), outputs=[0], harmonics=(1, 3, 5), nt=128
+        )
         assert br.completed and not br.failed
         hbm_peak = br.summary()["peak_amplitude"]
         if tol is None:
@@ -130,14 +160,29 @@ def test_design_rule_chart_draws_the_screen_beside_the_harmonic_balance(tmp_path
     from tests.conftest import assert_nonblank
     from workbench.render.screen_figures import plot_design_rule
 
-    pts = [{"damper": "cone", "family": fam, "variant": f"cone-angle={a}", "k2_over_k": k,
-            "bound_k2_over_k": 2 * k, "f_cap_n": cap, "growth": g, "growth_nl": gn,
-            "energy_mj": e, "peak_top_mm": 0.3, "f_ref_n": 9.6, "f_top_n": 30.0,
-            "verdict": "damps, separates" if fam == "in-phase" else "levels off"}
-           for fam, a, k, cap, g, gn, e in (("in-phase", 5, 0.005, 17.0, 2.3, 3.0, 3.6),
-                                            ("in-phase", 10, 0.02, 37.0, 1.8, 2.7, 14.2),
-                                            ("out-of-phase", 5, 0.44, 390.0, 1.05, 1.1, 10.4),
-                                            ("out-of-phase", 10, 0.43, 370.0, 1.06, 1.13, None))]
+    pts = [
+        {
+            "damper": "cone",
+            "family": fam,
+            "variant": f"cone-angle={a}",
+            "k2_over_k": k,
+            "bound_k2_over_k": 2 * k,
+            "f_cap_n": cap,
+            "growth": g,
+            "growth_nl": gn,
+            "energy_mj": e,
+            "peak_top_mm": 0.3,
+            "f_ref_n": 9.6,
+            "f_top_n": 30.0,
+            "verdict": "damps, separates" if fam == "in-phase" else "levels off",
+        }
+        for fam, a, k, cap, g, gn, e in (
+            ("in-phase", 5, 0.005, 17.0, 2.3, 3.0, 3.6),
+            ("in-phase", 10, 0.02, 37.0, 1.8, 2.7, 14.2),
+            ("out-of-phase", 5, 0.44, 390.0, 1.05, 1.1, 10.4),
+            ("out-of-phase", 10, 0.43, 370.0, 1.06, 1.13, None),
+        )
+    ]
     fig = plot_design_rule(pts, None)
     assert fig.axes[0].get_xscale() == "log"
     assert "k2/k" in fig.axes[0].get_xlabel()

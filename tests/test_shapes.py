@@ -90,8 +90,9 @@ def rod(tmp_path, monkeypatch):
     files = tmp_path / "geometry"
     files.mkdir()
     shutil.copy(gparams.DEFAULT_DIR / "rig.toml", files / "rig.toml")
-    (files / "rod.toml").write_text("[rod]\nradius_mm = 12.0\nlength_mm = 36.0\n"
-                                    "n_contact_points = 9\n")
+    (files / "rod.toml").write_text(
+        "[rod]\nradius_mm = 12.0\nlength_mm = 36.0\nn_contact_points = 9\n"
+    )
     monkeypatch.setattr(shapes, "__path__", [*shapes.__path__, str(pkg)])
     monkeypatch.setattr(gparams, "DEFAULT_DIR", files)
     shapes.rediscover()
@@ -110,8 +111,12 @@ def test_a_new_shape_module_is_found_without_other_edits(rod):
     gp = load_geometry_params("rod")  # its TOML, through the registry's record
     assert (gp.shape.radius_mm, gp.shape.length_mm, gp.shape.n_contact_points) == (12.0, 36.0, 9)
     lay = make_layout(gp)
-    ref = make_layout(load_geometry_params("cylinder", overrides={"cylinder": {
-        "radius_mm": 12.0, "length_mm": 36.0, "n_contact_points": 9}}))
+    ref = make_layout(
+        load_geometry_params(
+            "cylinder",
+            overrides={"cylinder": {"radius_mm": 12.0, "length_mm": 36.0, "n_contact_points": 9}},
+        )
+    )
     assert lay.n_pairs == 18 and np.array_equal(lay.points, ref.points)
     assert np.array_equal(lay.weight, ref.weight) and lay.kind == "line"
     # the figures know its style, the studies map their options onto its parameters

@@ -93,8 +93,12 @@ def built(study, tmp_path_factory):
     table already in the folder (as the study runner may have written them)."""
     root = tmp_path_factory.mktemp("study")
     plt = sf.pyplot()
-    for name, color in (("modes_in-phase", "C0"), ("mode_02", "C1"), ("first_bending", "C2"),
-                        ("rig_cone", "C3")):
+    for name, color in (
+        ("modes_in-phase", "C0"),
+        ("mode_02", "C1"),
+        ("first_bending", "C2"),
+        ("rig_cone", "C3"),
+    ):
         fig, ax = plt.subplots(figsize=(3, 2))
         ax.plot([0, 1, 2], [0, 1, 0], color=color, lw=4)
         (root / "figures").mkdir(exist_ok=True)
@@ -126,7 +130,11 @@ def test_stability_runs_join_and_cover_the_branch():
         assert b.start == a.stop - 1
     # a segment is unstable when either end is: [0-2] s, [2-5] u, [5-6] s, [6-8] u
     assert [(s.start, s.stop, ok) for s, ok in runs] == [
-        (0, 3, True), (2, 6, False), (5, 7, True), (6, 9, False)]
+        (0, 3, True),
+        (2, 6, False),
+        (5, 7, True),
+        (6, 9, False),
+    ]
     assert stability_runs(np.ones(4, bool)) == [(slice(0, 4), True)]
     assert stability_runs(np.zeros(0, bool)) == []
 
@@ -199,7 +207,10 @@ def test_every_figure_is_written_and_nonblank(built):
     assert ids.index("other-figures") == len(ids) - 2
     modes = sections[0]
     assert [f["path"] for f in modes["figures"]] == [
-        "figures/first_bending.png", "figures/modes_in-phase.png", "figures/mode_02.png"]
+        "figures/first_bending.png",
+        "figures/modes_in-phase.png",
+        "figures/mode_02.png",
+    ]
     assert modes["figures"][2]["caption"].startswith("Mode 2:")
     other = sections[ids.index("other-figures")]
     assert [f["path"] for f in other["figures"]] == ["figures/rig_cone.png"]
@@ -208,8 +219,12 @@ def test_every_figure_is_written_and_nonblank(built):
         for d in ("cone", "cylinder", "wedge"):
             assert (root / "figures" / f"receptance_{fam}_{d}.png").is_file()
             assert (root / "figures" / f"status_map_{fam}_{d}.png").is_file()
-        for stem in ("receptance_{}_all", "peak_amplitude_{}", "friction_energy_{}",
-                     "status_shares_{}"):
+        for stem in (
+            "receptance_{}_all",
+            "peak_amplitude_{}",
+            "friction_energy_{}",
+            "status_shares_{}",
+        ):
             assert (root / "figures" / f"{stem.format(fam)}.png").is_file()
 
 
@@ -217,8 +232,12 @@ def test_failed_branch_is_drawn_and_explained(built, study):
     root, sections = built
     failed = study.select(damper="wedge", phase_deg=0.0, force_n=9.6)[0]
     assert failed.branch.n_points > 10
-    caps = [f["caption"] for s in sections for f in s["figures"]
-            if "receptance_in-phase_wedge" in f["path"]]
+    caps = [
+        f["caption"]
+        for s in sections
+        for f in s["figures"]
+        if "receptance_in-phase_wedge" in f["path"]
+    ]
     assert len(caps) == 1 and "failed" in caps[0] and "DIVERGED_LINE_SEARCH" in caps[0]
     cases = next(s for s in sections if s["id"] == "cases")
     assert any("DIVERGED_LINE_SEARCH" in t for t in cases["text"])
@@ -272,8 +291,9 @@ def test_any_phase_family_gets_its_own_files(tmp_path):
     assert (tmp_path / "figures" / "receptance_phase-90deg_cone.png").is_file()
 
 
-@pytest.mark.parametrize("option,values", [("cf", (50.0, 100.0, 200.0)),
-                                           ("cone-angle", (5.0, 10.0, 15.0, 20.0))])
+@pytest.mark.parametrize(
+    "option,values", [("cf", (50.0, 100.0, 200.0)), ("cone-angle", (5.0, 10.0, 15.0, 20.0))]
+)
 def test_sweep_sections(tmp_path, option, values):
     r = synthetic_sweep(option, values, dampers=("cone", "wedge"))
     sections = build_sections(r, tmp_path)
@@ -288,8 +308,9 @@ def test_sweep_sections(tmp_path, option, values):
     cone = [row for row in rows if row["damper"] == "cone" and row["family"] == "in-phase"]
     assert [float(row[option]) for row in cone] == list(values)
     sc = sweep_curve(r.select(damper="cone", phase_deg=0.0), option)
-    np.testing.assert_allclose([float(row["peak amplitude (mm)"]) for row in cone], sc.amp_mm,
-                               rtol=1e-4)
+    np.testing.assert_allclose(
+        [float(row["peak amplitude (mm)"]) for row in cone], sc.amp_mm, rtol=1e-4
+    )
     if option == "cf":
         # a larger preload holds the contacts longer: less slip, higher peak
         assert np.all(np.diff(sc.amp_mm) > 0)
@@ -308,16 +329,19 @@ def test_sections_manifest_is_json(built):
 
 def _regression_case():
     """The fixed small case: wedge, in-phase, three forces (seed 0), 9.6 N failing."""
-    r = synthetic_study(dampers=("wedge",), phases=(0.0,), forces=(0.96, 9.6, 30.0),
-                        fail=("wedge", 0.0, 9.6))
+    r = synthetic_study(
+        dampers=("wedge",), phases=(0.0,), forces=(0.96, 9.6, 30.0), fail=("wedge", 0.0, 9.6)
+    )
     return r, curve_set(r, "wedge", 0.0)
 
 
 REGRESSION = {
-    "ref_receptance_wedge_in-phase.png":
-        lambda cases, forces, path: sf.plot_receptances(cases, path, forces=forces),
-    "ref_status_map_wedge_in-phase.png":
-        lambda cases, forces, path: sf.plot_status_map(cases[1:], path),
+    "ref_receptance_wedge_in-phase.png": lambda cases, forces, path: sf.plot_receptances(
+        cases, path, forces=forces
+    ),
+    "ref_status_map_wedge_in-phase.png": lambda cases, forces, path: sf.plot_status_map(
+        cases[1:], path
+    ),
 }
 
 
@@ -335,7 +359,8 @@ def test_image_regression(tmp_path, name):
     assert mean < MEAN_TOL and ink_share < INK_TOL, (
         f"{name} differs from its reference: mean {mean:.4f} (< {MEAN_TOL}), inked pixels "
         f"changed {ink_share:.4f} (< {INK_TOL}); if intended, regenerate with "
-        "UPD_REGEN_IMAGES=1")
+        "UPD_REGEN_IMAGES=1"
+    )
 
 
 def test_image_regression_catches_a_visible_change(tmp_path):
@@ -376,13 +401,16 @@ def test_a_branch_that_failed_at_its_first_point(tmp_path):
 
 def test_rerun_keeps_the_folder_in_step(tmp_path):
     """A second run with fewer cases removes our stale files and keeps everyone else's."""
-    build_sections(synthetic_study(dampers=("cone", "wedge"), phases=(0.0,), forces=(9.6,)),
-                   tmp_path)
+    build_sections(
+        synthetic_study(dampers=("cone", "wedge"), phases=(0.0,), forces=(9.6,)), tmp_path
+    )
     assert (tmp_path / "figures" / "receptance_in-phase_wedge.png").is_file()
     (tmp_path / "figures" / "rig.png").write_bytes(
-        (tmp_path / "figures" / "receptance_in-phase_wedge.png").read_bytes())
-    sections = build_sections(synthetic_study(dampers=("cone",), phases=(180.0,),
-                                              forces=(9.6,)), tmp_path)
+        (tmp_path / "figures" / "receptance_in-phase_wedge.png").read_bytes()
+    )
+    sections = build_sections(
+        synthetic_study(dampers=("cone",), phases=(180.0,), forces=(9.6,)), tmp_path
+    )
     shown = {f["path"] for s in sections for f in s["figures"]}
     on_disk = {p.relative_to(tmp_path).as_posix() for p in (tmp_path / "figures").glob("*")}
     assert shown == on_disk and "figures/rig.png" in shown

@@ -24,9 +24,20 @@ def _cases(j):
 def _report_shape(out):
     """What a study's report shows, without the times (the manifest's summary and sections)."""
     m = json.loads((out / "manifest.json").read_text())
-    return {"summary": m["summary"], "inputs": m["inputs"],
-            "sections": [(s["id"], s["title"], s["text"], [f["path"] for f in s["figures"]],
-                          [t["path"] for t in s["tables"]]) for s in m["sections"]]}
+    return {
+        "summary": m["summary"],
+        "inputs": m["inputs"],
+        "sections": [
+            (
+                s["id"],
+                s["title"],
+                s["text"],
+                [f["path"] for f in s["figures"]],
+                [t["path"] for t in s["tables"]],
+            )
+            for s in m["sections"]
+        ],
+    }
 
 
 def test_killed_study_resumes_and_mpi_matches_serial(tiny_resumed, tmp_path):
@@ -47,13 +58,14 @@ def test_killed_study_resumes_and_mpi_matches_serial(tiny_resumed, tmp_path):
     for name in ("model_cone.png", "modes_cone.png"):
         assert (out / "figures" / name).is_file()
     resumed_shape = _report_shape(out)
-    reused = {k.split(",")[0]: v for k, v in
-              json.loads((out / "manifest.json").read_text())["timings"].items()
-              if "reused from the cache" in k}
+    reused = {
+        k.split(",")[0]: v
+        for k, v in json.loads((out / "manifest.json").read_text())["timings"].items()
+        if "reused from the cache" in k
+    }
     assert {"geometry", "reduction rig", "reduction damper", "cases (2)"} <= set(reused)
     # the cases cost what their own runs measured (not this run's 0.01 s)
-    assert reused["cases (2)"] == pytest.approx(sum(c["wall_s"] for c in first["cases"]),
-                                                abs=0.01)
+    assert reused["cases (2)"] == pytest.approx(sum(c["wall_s"] for c in first["cases"]), abs=0.01)
     assert reused["reduction rig"] > 0.5 and reused["geometry"] > 0.1
 
     rf = run_upd("study", TINY, "--out", out, "--json", "--force")  # uninterrupted
@@ -62,11 +74,32 @@ def test_killed_study_resumes_and_mpi_matches_serial(tiny_resumed, tmp_path):
 
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
     mp = subprocess.run(
-        ["mpirun", "-n", "2", "--oversubscribe", "-x", "OMP_NUM_THREADS=1",
-         "-x", "OPENBLAS_NUM_THREADS=1", "-x", "UPD_NO_PROGRESS=1",
-         sys.executable, "-m", "workbench.cli.main", "study", str(TINY),
-         "--out", str(tmp_path / "mpi"), "--json"],
-        cwd=ROOT, capture_output=True, text=True, timeout=1200, env=env)
+        [
+            "mpirun",
+            "-n",
+            "2",
+            "--oversubscribe",
+            "-x",
+            "OMP_NUM_THREADS=1",
+            "-x",
+            "OPENBLAS_NUM_THREADS=1",
+            "-x",
+            "UPD_NO_PROGRESS=1",
+            sys.executable,
+            "-m",
+            "workbench.cli.main",
+            "study",
+            str(TINY),
+            "--out",
+            str(tmp_path / "mpi"),
+            "--json",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=1200,
+        env=env,
+    )
     assert mp.returncode == 0, mp.stderr[-3000:]
 
     # under mpirun the ranks' stdout is a pseudo-terminal, and something in the run writes

@@ -19,17 +19,20 @@ def test_cli_overrides_file_and_records_origin(tmp_path):
     assert spec.source["harmonics"] == "default"
 
 
-@pytest.mark.parametrize("values, needle", [
-    ({"forcs": [1.0]}, "did you mean 'forces'"),
-    ({"mesh_size": 3.0}, "did you mean 'mesh-size'"),
-    ({"mu": "abc"}, "mu = 'abc'"),
-    ({"mu": 3.0}, "0 <= mu <= 2"),
-    ({"dampers": "cone,wedgee"}, "did you mean 'wedge'"),
-    ({"harmonics": [0, 2, 3]}, "containing 1"),
-    ({"forces": [-1.0]}, "forces[0] = -1.0"),
-    ({"band-in-phase": [420.0, 380.0]}, "lo < hi"),
-    ({"sweep": "cff", "sweep-values": [1.0]}, "did you mean 'cf'"),
-])
+@pytest.mark.parametrize(
+    "values, needle",
+    [
+        ({"forcs": [1.0]}, "did you mean 'forces'"),
+        ({"mesh_size": 3.0}, "did you mean 'mesh-size'"),
+        ({"mu": "abc"}, "mu = 'abc'"),
+        ({"mu": 3.0}, "0 <= mu <= 2"),
+        ({"dampers": "cone,wedgee"}, "did you mean 'wedge'"),
+        ({"harmonics": [0, 2, 3]}, "containing 1"),
+        ({"forces": [-1.0]}, "forces[0] = -1.0"),
+        ({"band-in-phase": [420.0, 380.0]}, "lo < hi"),
+        ({"sweep": "cff", "sweep-values": [1.0]}, "did you mean 'cf'"),
+    ],
+)
 def test_bad_values_name_the_option(values, needle):
     with pytest.raises(InputError) as e:
         resolve(values)
@@ -60,8 +63,16 @@ def test_paper_study_plans_42_cases_with_distinct_cache_keys():
 
 
 def test_sweep_plans_one_case_per_value_and_changes_only_the_model_key():
-    spec = resolve({"kind": "sweep", "sweep": "cf", "sweep-values": [100.0, 300.0],
-                    "dampers": ["cone"], "phases": [0.0], "forces": [9.6]})
+    spec = resolve(
+        {
+            "kind": "sweep",
+            "sweep": "cf",
+            "sweep-values": [100.0, 300.0],
+            "dampers": ["cone"],
+            "phases": [0.0],
+            "forces": [9.6],
+        }
+    )
     cases = plan(spec)
     assert [c.settings["cf"] for c in cases] == [100.0, 300.0]
     assert cases[0].model_digest != cases[1].model_digest
@@ -76,8 +87,11 @@ def _case_studies() -> list:
     """
     import tomllib
 
-    return [p for p in sorted((ROOT / "studies").glob("*.toml"))
-            if tomllib.loads(p.read_text()).get("kind", "") in ("comparison", "sweep")]
+    return [
+        p
+        for p in sorted((ROOT / "studies").glob("*.toml"))
+        if tomllib.loads(p.read_text()).get("kind", "") in ("comparison", "sweep")
+    ]
 
 
 def test_the_shipped_case_studies_are_found():
@@ -107,6 +121,7 @@ def test_shipped_study_files_load_and_every_case_fits_the_groove(path):
         if key in seen:
             continue
         seen.add(key)
-        gp = load_geometry_params(req["damper"], req["geometry_file"], req["overrides"],
-                                  req["size_mm"])
+        gp = load_geometry_params(
+            req["damper"], req["geometry_file"], req["overrides"], req["size_mm"]
+        )
         make_layout(gp)

@@ -47,13 +47,26 @@ def _cut(case, n: int, message: str = "stopped after max_points = 5 points"):
     b = case.branch
     sl = slice(0, n)
     short = dataclasses.replace(
-        b, freq_hz=b.freq_hz[sl], stable=b.stable[sl], newton_its=b.newton_its[sl],
-        energy_residual=b.energy_residual[sl], out_amp=b.out_amp[sl], out_h1=b.out_h1[sl],
-        out_harm=b.out_harm[sl], status=b.status[sl], friction_energy=b.friction_energy[sl],
-        x=b.x[sl], work_ext=b.work_ext[sl], work_visc=b.work_visc[sl],
-        work_friction=b.work_friction[sl], work_normal=b.work_normal[sl],
-        max_floquet_real=b.max_floquet_real[sl], completed=False, failed=False,
-        message=message)
+        b,
+        freq_hz=b.freq_hz[sl],
+        stable=b.stable[sl],
+        newton_its=b.newton_its[sl],
+        energy_residual=b.energy_residual[sl],
+        out_amp=b.out_amp[sl],
+        out_h1=b.out_h1[sl],
+        out_harm=b.out_harm[sl],
+        status=b.status[sl],
+        friction_energy=b.friction_energy[sl],
+        x=b.x[sl],
+        work_ext=b.work_ext[sl],
+        work_visc=b.work_visc[sl],
+        work_friction=b.work_friction[sl],
+        work_normal=b.work_normal[sl],
+        max_floquet_real=b.max_floquet_real[sl],
+        completed=False,
+        failed=False,
+        message=message,
+    )
     return dataclasses.replace(case, branch=short)
 
 
@@ -76,10 +89,18 @@ def test_a_peak_at_the_band_edge_is_not_a_peak():
     full = synthetic_case("cone", 180.0, 30.0)
     i = full.peak_index
     b = full.branch
-    rising = dataclasses.replace(full, branch=dataclasses.replace(
-        b, freq_hz=b.freq_hz[: i + 1], out_amp=b.out_amp[: i + 1], stable=b.stable[: i + 1],
-        friction_energy=b.friction_energy[: i + 1], status=b.status[: i + 1],
-        energy_residual=b.energy_residual[: i + 1]))
+    rising = dataclasses.replace(
+        full,
+        branch=dataclasses.replace(
+            b,
+            freq_hz=b.freq_hz[: i + 1],
+            out_amp=b.out_amp[: i + 1],
+            stable=b.stable[: i + 1],
+            friction_energy=b.friction_energy[: i + 1],
+            status=b.status[: i + 1],
+            energy_residual=b.energy_residual[: i + 1],
+        ),
+    )
     assert rising.branch.completed and not rising.peak_covered
     assert "band edge" in rising.peak_note()
 
@@ -111,8 +132,9 @@ def test_lock_refuses_a_live_owner_and_removes_a_stale_one(tmp_path, caplog, mon
     monkeypatch.setattr(logging.getLogger("workbench"), "propagate", True)
     sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     try:
-        (tmp_path / LOCK_NAME).write_text(json.dumps({"pid": sleeper.pid,
-                                                      "host": os.uname().nodename}))
+        (tmp_path / LOCK_NAME).write_text(
+            json.dumps({"pid": sleeper.pid, "host": os.uname().nodename})
+        )
         with pytest.raises(InputError) as e, folder_lock(tmp_path):
             pass
         assert "--out" in str(e.value) and f"process {sleeper.pid}" in str(e.value)
@@ -157,8 +179,11 @@ def _wait_for(path: Path, text: str, p: subprocess.Popen, timeout: float = 120.0
 def test_curves_stopped_by_max_points_exit_3_with_lower_bounds(warm, tmp_path):
     out = _copy(warm, tmp_path / "s")
     # half-written files of a killed run (atomic writes leave them only on SIGKILL)
-    stale = [out / "cache" / "cases" / ".0123.h5.abcd.part", out / "figures" / ".x.png.k.part",
-             out / "cache" / "geometry" / ".rig.1234.part.msh"]
+    stale = [
+        out / "cache" / "cases" / ".0123.h5.abcd.part",
+        out / "figures" / ".x.png.k.part",
+        out / "cache" / "geometry" / ".rig.1234.part.msh",
+    ]
     for p in stale:
         p.write_bytes(b"half")
     r = run_upd("study", TINY, "--out", out, "--json", "--max-points", "5")
@@ -181,9 +206,13 @@ def test_a_second_run_on_the_same_folder_is_refused_at_once(warm, tmp_path):
     out = _copy(warm, tmp_path / "s", drop_cases=True)
     log = tmp_path / "first.err"
     with log.open("w") as fh:  # with its progress bars, as a user sees it
-        first = subprocess.Popen([*CMD, "--out", str(out)], cwd=ROOT, stdout=subprocess.DEVNULL,
-                                 stderr=fh, env=dict(os.environ, UPD_NO_PROGRESS="0",
-                                                     UPD_PROGRESS="always"))
+        first = subprocess.Popen(
+            [*CMD, "--out", str(out)],
+            cwd=ROOT,
+            stdout=subprocess.DEVNULL,
+            stderr=fh,
+            env=dict(os.environ, UPD_NO_PROGRESS="0", UPD_PROGRESS="always"),
+        )
     try:
         _wait_for(log, "model for cone", first)
         t0 = time.time()
@@ -210,9 +239,13 @@ def test_ctrl_c_during_the_curves_of_a_second_run(warm, tmp_path):
         # a run started in the background of a script inherits SIGINT ignored (and then
         # rightly ignores Ctrl-C); the test is about our handler, so the child starts with
         # the default disposition whatever the test runner's
-        p = subprocess.Popen([*CMD, "--out", str(out)], cwd=ROOT, stdout=subprocess.DEVNULL,
-                             stderr=fh,
-                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        p = subprocess.Popen(
+            [*CMD, "--out", str(out)],
+            cwd=ROOT,
+            stdout=subprocess.DEVNULL,
+            stderr=fh,
+            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+        )
     try:
         _wait_for(log, "cases to compute", p)
         p.send_signal(signal.SIGINT)

@@ -32,19 +32,28 @@ def test_distributions_parse_and_truncate():
     assert ln.ppf(np.array([0.5]))[0] == pytest.approx(2.0)  # the median
     u = U.parse_distribution("uq-cf", "uniform, 0.8, 1.2")
     assert u.ppf(np.array([0.25]))[0] == pytest.approx(0.9)
-    for bad in ("gauss 1 2", "uniform 2 1", "normal 1 -1", "lognormal 0 1", "normal 1 0.1 2 3",
-                "uniform 1", "normal 1 x"):
+    for bad in (
+        "gauss 1 2",
+        "uniform 2 1",
+        "normal 1 -1",
+        "lognormal 0 1",
+        "normal 1 0.1 2 3",
+        "uniform 1",
+        "normal 1 x",
+    ):
         with pytest.raises(InputError):
             U.parse_distribution("uq-mu", bad)
 
 
 def test_design_of_n_is_a_prefix_of_2n_and_marginals_follow_the_distribution():
-    dists = {"mu": U.parse_distribution("mu", "uniform 0.2 0.8"),
-             "cf": U.parse_distribution("cf", "normal 1 0.1 0.7 1.3")}
+    dists = {
+        "mu": U.parse_distribution("mu", "uniform 0.2 0.8"),
+        "cf": U.parse_distribution("cf", "normal 1 0.1 0.7 1.3"),
+    }
     small = U.make_design(dists, 8, seed=5)
     big = U.make_design(dists, 16, seed=5)
     assert small.n_rows == 8 * 4 and big.n_rows == 16 * 4
-    assert np.array_equal(small.values, big.values[:small.n_rows])  # bit for bit
+    assert np.array_equal(small.values, big.values[: small.n_rows])  # bit for bit
     assert [small.role(r) for r in range(4)] == ["A", "AB1", "AB2", "B"]
     # the A and B rows are quasi-random draws of the joint distribution
     many = U.make_design(dists, 1024, seed=1)
@@ -69,10 +78,10 @@ ISHIGAMI_ST = (0.5576, 0.4424, 0.2437)
 
 
 def _ishigami_indices(a=7.0, b=0.1):
-    v = a * a / 8 + b * math.pi ** 4 / 5 + b * b * math.pi ** 8 / 18 + 0.5
-    v1 = 0.5 * (1 + b * math.pi ** 4 / 5) ** 2
+    v = a * a / 8 + b * math.pi**4 / 5 + b * b * math.pi**8 / 18 + 0.5
+    v1 = 0.5 * (1 + b * math.pi**4 / 5) ** 2
     v2 = a * a / 8
-    v13 = b * b * math.pi ** 8 * (1 / 18 - 1 / 50)
+    v13 = b * b * math.pi**8 * (1 / 18 - 1 / 50)
     return (v1 / v, v2 / v, 0.0), ((v1 + v13) / v, v2 / v, v13 / v)
 
 
@@ -116,8 +125,7 @@ def test_seated_preloads_by_hand():
 
 def test_tilted_preloads_keep_each_side_and_open_one_end():
     s = np.linspace(0.0, 0.03, 12)  # two lines of 12 points, 30 mm long, along x
-    pts = np.vstack([np.column_stack([s, 0 * s, 0 * s]), np.column_stack([s, 0 * s + 0.01,
-                                                                          0 * s])])
+    pts = np.vstack([np.column_stack([s, 0 * s, 0 * s]), np.column_stack([s, 0 * s + 0.01, 0 * s])])
     side = np.repeat([0, 1], 12)
     kn = np.full(24, 1e8)  # N/m per pair
     n0 = np.full(24, 100.0)  # uniform: approach 1 um
@@ -174,11 +182,32 @@ if MPI.COMM_WORLD.rank == 0:
 
 @pytest.mark.mpi
 def test_mpi_shared_counter_balances_and_beats_round_robin():
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               PYTHONPATH=str(ROOT))
-    p = subprocess.run(["mpirun", "-n", "2", "--oversubscribe", "-x", "OMP_NUM_THREADS=1",
-                        "-x", "PYTHONPATH", sys.executable, "-c", _DEMO], cwd=ROOT,
-                       capture_output=True, text=True, timeout=300, env=env)
+    env = dict(
+        os.environ,
+        OMPI_ALLOW_RUN_AS_ROOT="1",
+        OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+        PYTHONPATH=str(ROOT),
+    )
+    p = subprocess.run(
+        [
+            "mpirun",
+            "-n",
+            "2",
+            "--oversubscribe",
+            "-x",
+            "OMP_NUM_THREADS=1",
+            "-x",
+            "PYTHONPATH",
+            sys.executable,
+            "-c",
+            _DEMO,
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
     assert p.returncode == 0, p.stderr[-3000:]
     r = json.loads(p.stdout.strip().splitlines()[-1])
     assert r["tasks_static"] == list(range(24)) and r["tasks_dynamic"] == list(range(24))
@@ -232,16 +261,45 @@ def test_tiny_study_caches_resumes_grows_and_matches_on_two_ranks(tmp_path):
     mpi = tmp_path / "mpi"
     shutil.copytree(out / "cache" / "geometry", mpi / "cache" / "geometry")
     shutil.copytree(out / "cache" / "fe", mpi / "cache" / "fe")
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               PYTHONPATH=str(ROOT), UPD_NO_PROGRESS="1")
-    p = subprocess.run(["mpirun", "-n", "2", "--oversubscribe", "-x", "OMP_NUM_THREADS=1",
-                        "-x", "PYTHONPATH", "-x", "UPD_NO_PROGRESS", sys.executable, "-m",
-                        "workbench.cli.main", "study", str(TINY), "--out", str(mpi), "--json",
-                        "-q"], cwd=ROOT, capture_output=True, text=True, timeout=1800, env=env)
+    env = dict(
+        os.environ,
+        OMPI_ALLOW_RUN_AS_ROOT="1",
+        OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+        PYTHONPATH=str(ROOT),
+        UPD_NO_PROGRESS="1",
+    )
+    p = subprocess.run(
+        [
+            "mpirun",
+            "-n",
+            "2",
+            "--oversubscribe",
+            "-x",
+            "OMP_NUM_THREADS=1",
+            "-x",
+            "PYTHONPATH",
+            "-x",
+            "UPD_NO_PROGRESS",
+            sys.executable,
+            "-m",
+            "workbench.cli.main",
+            "study",
+            str(TINY),
+            "--out",
+            str(mpi),
+            "--json",
+            "-q",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=1800,
+        env=env,
+    )
     assert p.returncode == 0, p.stderr[-3000:]
     # a rank's stdout is a pty under OpenMPI: colorama (imported by numba) writes its
     # reset code ESC[0m there at exit once numba has formatted a message; keep the JSON
-    jm = json.loads(p.stdout[p.stdout.index("{"):p.stdout.rindex("}") + 1])
+    jm = json.loads(p.stdout[p.stdout.index("{") : p.stdout.rindex("}") + 1])
     assert jm["ranks"] == 2 and jm["n_computed"] == n
     par, dpar = _h5(mpi / "uncertainty.h5")
     assert dpar == digests
@@ -258,24 +316,33 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
     from tests.conftest import assert_nonblank
     from workbench.render.uncertainty_figures import uncertainty_figures
 
-    dists = {"mu": U.parse_distribution("mu", "normal 0.5 0.1 0.25 0.75"),
-             "seat-tilt": U.parse_distribution("t", "normal 0 0.01 -0.03 0.03")}
+    dists = {
+        "mu": U.parse_distribution("mu", "normal 0.5 0.1 0.25 0.75"),
+        "seat-tilt": U.parse_distribution("t", "normal 0 0.01 -0.03 0.03"),
+    }
     design = U.make_design(dists, 32, 1)
     x = design.values
     res = {}
     for k, d in enumerate(("cone", "wedge")):
         for ph in (0.0, 180.0):
             pk = 0.3 + 0.1 * k + 0.2 * (x[:, 0] - 0.5) ** 2 + 5.0 * k * np.abs(x[:, 1])
-            res[(d, ph)] = {"peak_amplitude_mm": pk, "peak_frequency_hz": 312 + x[:, 0],
-                            "friction_energy_mj": x[:, 0] ** 2, "hbm_s": np.ones(len(pk)),
-                            "failed": np.zeros(len(pk), bool), "digests": [""] * len(pk)}
+            res[(d, ph)] = {
+                "peak_amplitude_mm": pk,
+                "peak_frequency_hz": 312 + x[:, 0],
+                "friction_energy_mj": x[:, 0] ** 2,
+                "hbm_s": np.ones(len(pk)),
+                "failed": np.zeros(len(pk), bool),
+                "digests": [""] * len(pk),
+            }
     a = U.analyse(SimpleNamespace(uq_threshold=0.4, uq_seed=1), design, dists, res)
     assert a["robust"] == {"in-phase": "cone", "out-of-phase": "cone"}
     drivers = {(r["damper"], r["family"]): r["driver"] for r in a["groups"]}
     assert drivers[("cone", "in-phase")] == "mu" and drivers[("wedge", "in-phase")] == "seat-tilt"
     ans = U.answer_rows(a)
     assert [(r["family"], r["rank"], r["damper"]) for r in ans][:2] == [
-        ("in-phase", 1, "cone"), ("in-phase", 2, "wedge")]
+        ("in-phase", 1, "cone"),
+        ("in-phase", 2, "wedge"),
+    ]
     assert any("the cone has the smallest 95th-percentile peak" in x for x in U.headline(a))
     figs = uncertainty_figures(tmp_path / "figures", design, res, a)
     assert {f["id"] for f in figs} >= {"violins", "exceedance", "tornado", "scatter"}
@@ -292,12 +359,23 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
 def test_bad_uncertainty_inputs_exit_2_before_any_work(tmp_path):
     from workbench.studies.spec import resolve
 
-    for values, needle in (({"uq-mu": "gauss 0.5 0.1"}, "uq-mu"),
-                           ({"uq-damping": "normal 0.002 0.01"}, "uq-damping"),
-                           ({"uq-kt": "normal 1 1"}, "uq-kt")):
+    for values, needle in (
+        ({"uq-mu": "gauss 0.5 0.1"}, "uq-mu"),
+        ({"uq-damping": "normal 0.002 0.01"}, "uq-damping"),
+        ({"uq-kt": "normal 1 1"}, "uq-kt"),
+    ):
         with pytest.raises(InputError, match=needle):
             U.study_distributions(resolve({"kind": "uncertainty", **values}))
-    r = run_upd("study", "--kind", "uncertainty", "--dampers", "cone", "--forces", "15,30",
-                "--out", tmp_path / "o")
+    r = run_upd(
+        "study",
+        "--kind",
+        "uncertainty",
+        "--dampers",
+        "cone",
+        "--forces",
+        "15,30",
+        "--out",
+        tmp_path / "o",
+    )
     assert r.code == 2 and "forces" in r.err and r.err.count("\n") == 1, r.err
     assert not (tmp_path / "o" / "cache" / "fe").exists()

@@ -60,8 +60,9 @@ def test_modes_pvd_carry_numbers_and_frequencies(box_msh, tmp_path):
     vtu = vtk_out.write_mesh_vtu(box_msh, tmp_path / "box.vtu")
     g = pv.read(vtu)
     n = g.n_points
-    disp = np.stack([np.column_stack([g.points[:, 0] * k, np.zeros(n), np.zeros(n)])
-                     for k in (1.0, 2.0, 3.0)])
+    disp = np.stack(
+        [np.column_stack([g.points[:, 0] * k, np.zeros(n), np.zeros(n)]) for k in (1.0, 2.0, 3.0)]
+    )
     shapes = SimpleNamespace(points=g.points, cells=g.cells, celltypes=g.celltypes, disp=disp)
     freqs = np.array([312.6, 408.1, 950.0])
     pvd = vtk_out.write_modes(tmp_path, "rig", shapes, freqs)

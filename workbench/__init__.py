@@ -26,15 +26,38 @@ _os.environ.setdefault("NUMBA_DISABLE_ERROR_MESSAGE_HIGHLIGHTING", "1")
 
 __version__ = "0.1.0"
 
-__all__ = ["__version__", "Model", "model", "frf", "receptance_figure", "status_figure",
-           "energy_figure", "peak_figure", "study", "load_results", "frf_model", "frf_curves",
-           "frf_figure", "read_matrices"]
+__all__ = [
+    "__version__",
+    "Model",
+    "model",
+    "frf",
+    "receptance_figure",
+    "status_figure",
+    "energy_figure",
+    "peak_figure",
+    "study",
+    "load_results",
+    "frf_model",
+    "frf_curves",
+    "frf_figure",
+    "read_matrices",
+]
 
 # The Python API (workbench/api.py, docs/API.md), loaded on first use so that
 # ``import workbench`` stays light and touches neither dolfinx nor matplotlib.
 _API = (
-    "Model", "model", "frf", "receptance_figure", "status_figure", "energy_figure",
-    "peak_figure", "study", "load_results", "frf_model", "frf_curves", "frf_figure",
+    "Model",
+    "model",
+    "frf",
+    "receptance_figure",
+    "status_figure",
+    "energy_figure",
+    "peak_figure",
+    "study",
+    "load_results",
+    "frf_model",
+    "frf_curves",
+    "frf_figure",
     "read_matrices",
 )
 

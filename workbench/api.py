@@ -65,8 +65,11 @@ class Model:
         from .post.inputs import used_inputs
         from .studies.plan import MODEL_KEYS
 
-        return [r for r in used_inputs(self.settings, self.source, "comparison")
-                if r["option"] in MODEL_KEYS]
+        return [
+            r
+            for r in used_inputs(self.settings, self.source, "comparison")
+            if r["option"] in MODEL_KEYS
+        ]
 
 
 def _options(options: dict[str, Any]) -> dict[str, Any]:
@@ -78,8 +81,12 @@ def _options(options: dict[str, Any]) -> dict[str, Any]:
         if name not in BY_NAME:
             from .errors import did_you_mean
 
-            raise InputError(key, v, "an upd study option with underscores (mesh_size, mu, ...)",
-                             did_you_mean(name, BY_NAME))
+            raise InputError(
+                key,
+                v,
+                "an upd study option with underscores (mesh_size, mu, ...)",
+                did_you_mean(name, BY_NAME),
+            )
         out[name] = v
     return out
 
@@ -122,8 +129,12 @@ def frf(m: Model, force_n: float, phase_deg: float = 180.0, **options: Any):
     values = _options(options)
     for k in values:
         if k in MODEL_KEYS:
-            raise InputError(k.replace("-", "_"), values[k], "a solve option here",
-                             "model options go to wb.model()")
+            raise InputError(
+                k.replace("-", "_"),
+                values[k],
+                "a solve option here",
+                "model options go to wb.model()",
+            )
     settings = dict(m.settings)
     for k, v in values.items():
         settings[k] = check_option(BY_NAME[k], v)
@@ -137,40 +148,43 @@ def _forces(curves: Sequence[Any]) -> list[float]:
     return sorted({c.force_n for c in curves})
 
 
-def receptance_figure(curves: Sequence[Any], path: str | Path | None = None,
-                      title: str | None = None):
+def receptance_figure(
+    curves: Sequence[Any], path: str | Path | None = None, title: str | None = None
+):
     """Receptance (mm/N) against frequency, one curve per force: a Figure, or the PNG path."""
     from .render.study_figures import plot_receptances
 
     return plot_receptances(list(curves), path, forces=_forces(curves), title=title)
 
 
-def status_figure(curves: Sequence[Any], path: str | Path | None = None,
-                  title: str | None = None):
+def status_figure(curves: Sequence[Any], path: str | Path | None = None, title: str | None = None):
     """Contact status of every pair along the curves (one panel per curve)."""
     from .render.study_figures import plot_status_map
 
     return plot_status_map(list(curves), path, title=title)
 
 
-def energy_figure(curves: Sequence[Any], path: str | Path | None = None,
-                  title: str | None = None):
+def energy_figure(curves: Sequence[Any], path: str | Path | None = None, title: str | None = None):
     """Friction energy per cycle at resonance against the force (mJ)."""
     from .render.study_figures import plot_energy_vs_force
 
     return plot_energy_vs_force(list(curves), path, title=title)
 
 
-def peak_figure(curves: Sequence[Any], path: str | Path | None = None,
-                title: str | None = None):
+def peak_figure(curves: Sequence[Any], path: str | Path | None = None, title: str | None = None):
     """Peak response against the force (mm)."""
     from .render.study_figures import plot_peak_vs_force
 
     return plot_peak_vs_force(list(curves), path, title=title)
 
 
-def study(file: str | Path | None = None, *, out: str | Path = "results/study",
-          force: bool = False, **options: Any):
+def study(
+    file: str | Path | None = None,
+    *,
+    out: str | Path = "results/study",
+    force: bool = False,
+    **options: Any,
+):
     """Run a study (a study TOML and/or options) as ``upd study`` does; the StudyResults."""
     from .studies.runner import run_study
     from .studies.spec import load_study
@@ -198,21 +212,42 @@ def frf_curves(frf_model_or_path: Any) -> list[Any]:
     """Every level of a ``upd frf`` model: one :class:`workbench.hbm.Branch` per level."""
     from .hbm import frequency_response
 
-    fm = frf_model(frf_model_or_path) if isinstance(frf_model_or_path, (str, Path)) \
+    fm = (
+        frf_model(frf_model_or_path)
+        if isinstance(frf_model_or_path, (str, Path))
         else frf_model_or_path
-    return [frequency_response(fm.system, fm.f1, lev, fm.band_hz, fm.outputs,
-                               harmonics=fm.harmonics, nt=fm.nt or None, options=fm.options,
-                               output_names=fm.output_names, label=f"level {lev:g}")
-            for lev in fm.levels]
+    )
+    return [
+        frequency_response(
+            fm.system,
+            fm.f1,
+            lev,
+            fm.band_hz,
+            fm.outputs,
+            harmonics=fm.harmonics,
+            nt=fm.nt or None,
+            options=fm.options,
+            output_names=fm.output_names,
+            label=f"level {lev:g}",
+        )
+        for lev in fm.levels
+    ]
 
 
-def frf_figure(branches: Sequence[Any], path: str | Path | None = None, *,
-               unit_scale: float = 1.0, unit: str = "m", title: str = ""):
+def frf_figure(
+    branches: Sequence[Any],
+    path: str | Path | None = None,
+    *,
+    unit_scale: float = 1.0,
+    unit: str = "m",
+    title: str = "",
+):
     """Amplitude per newton against frequency for ``upd frf`` branches (log axis)."""
     from .render.curves import plot_frf
 
-    return plot_frf(list(branches), path, unit_scale=unit_scale, unit=unit, title=title,
-                    per_level=True)
+    return plot_frf(
+        list(branches), path, unit_scale=unit_scale, unit=unit, title=title, per_level=True
+    )
 
 
 def read_matrices(files: dict[str, str | Path], dof_map: str | Path | None = None):
@@ -223,7 +258,17 @@ def read_matrices(files: dict[str, str | Path], dof_map: str | Path | None = Non
 
 
 __all__ = [
-    "Model", "model", "frf", "receptance_figure", "status_figure", "energy_figure",
-    "peak_figure", "study", "load_results", "frf_model", "frf_curves", "frf_figure",
+    "Model",
+    "model",
+    "frf",
+    "receptance_figure",
+    "status_figure",
+    "energy_figure",
+    "peak_figure",
+    "study",
+    "load_results",
+    "frf_model",
+    "frf_curves",
+    "frf_figure",
     "read_matrices",
 ]

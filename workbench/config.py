@@ -48,9 +48,17 @@ def param(
 
 def _unit_of(name: str) -> str:
     for suffix, unit in (
-        ("_mm", "mm"), ("_deg", "deg"), ("_hz", "Hz"), ("_n", "N"), ("_gpa", "GPa"),
-        ("_kg_m3", "kg/m^3"), ("_n_per_mm", "N/mm"), ("_n_per_m", "N/m"), ("_m", "m"),
-        ("_pa", "Pa"), ("_s", "s"),
+        ("_mm", "mm"),
+        ("_deg", "deg"),
+        ("_hz", "Hz"),
+        ("_n", "N"),
+        ("_gpa", "GPa"),
+        ("_kg_m3", "kg/m^3"),
+        ("_n_per_mm", "N/mm"),
+        ("_n_per_m", "N/m"),
+        ("_m", "m"),
+        ("_pa", "Pa"),
+        ("_s", "s"),
     ):
         if name.endswith(suffix):
             return unit
@@ -71,14 +79,22 @@ def check_field(f: dataclasses.Field, value: Any, where: str = "", typ: Any = No
     if typ in (int, "int", float, "float") and isinstance(value, str) and _numeric(value):
         # a quoted number in a parameter file is a typo, not a number: no silent coercion
         # (other text falls through to the range check's "not a number")
-        raise InputError(name, value, "a number" if typ in (float, "float") else
-                         "a whole number", "a string; write it without quotes")
+        raise InputError(
+            name,
+            value,
+            "a number" if typ in (float, "float") else "a whole number",
+            "a string; write it without quotes",
+        )
     if typ in (int, "int"):
         return check_int(name, value, m.get("lo"), m.get("hi"))
     if typ in (float, "float"):
         return check_range(
-            name, value, m.get("lo"), m.get("hi"),
-            lo_open=m.get("lo_open", False), hi_open=m.get("hi_open", False),
+            name,
+            value,
+            m.get("lo"),
+            m.get("hi"),
+            lo_open=m.get("lo_open", False),
+            hi_open=m.get("hi_open", False),
             unit=_unit_of(f.name),
         )
     if typ in (bool, "bool"):
@@ -119,7 +135,9 @@ def load_record(cls: type[T], data: Mapping[str, Any] | None = None, where: str 
     for key in data:
         if key not in fields:
             raise InputError(
-                f"{where}{key}", data[key], "one of the keys " + ", ".join(fields),
+                f"{where}{key}",
+                data[key],
+                "one of the keys " + ", ".join(fields),
                 ("unknown key; " + did_you_mean(key, fields)).rstrip("; "),
             )
     kwargs: dict[str, Any] = {}
@@ -150,12 +168,16 @@ def read_toml(path: str | Path) -> dict[str, Any]:
     except tomllib.TOMLDecodeError as e:
         raise InputError("file", str(p), "valid TOML", str(e)) from None
     except UnicodeDecodeError as e:
-        raise InputError("file", str(p), "a UTF-8 text file (TOML)",
-                         f"byte 0x{e.object[e.start]:02x} at offset {e.start} is not UTF-8"
-                         ) from None
+        raise InputError(
+            "file",
+            str(p),
+            "a UTF-8 text file (TOML)",
+            f"byte 0x{e.object[e.start]:02x} at offset {e.start} is not UTF-8",
+        ) from None
     except OSError as e:
-        raise InputError("file", str(p), "a readable TOML file",
-                         e.strerror or type(e).__name__) from None
+        raise InputError(
+            "file", str(p), "a readable TOML file", e.strerror or type(e).__name__
+        ) from None
 
 
 def record_to_dict(record: Any) -> dict[str, Any]:

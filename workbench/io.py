@@ -85,8 +85,9 @@ def file_digest(path: str | Path, n: int = 16) -> str:
     return h.hexdigest()[:n]
 
 
-def code_version(package_dir: str | Path, names: tuple[str, ...] | None = None,
-                 tag: str = "") -> str:
+def code_version(
+    package_dir: str | Path, names: tuple[str, ...] | None = None, tag: str = ""
+) -> str:
     """Package version plus a hash of the sources that produce a cached result.
 
     ``names``: the files of ``package_dir`` that count (default: every
@@ -150,8 +151,12 @@ def folder_lock(folder: str | Path, option: str = "--out") -> Iterator[Path]:
 
     folder = Path(folder)
     lock = folder / LOCK_NAME
-    me = {"pid": os.getpid(), "host": socket.gethostname(), "start": _process_start(os.getpid()),
-          "since": time.strftime("%Y-%m-%d %H:%M:%S")}
+    me = {
+        "pid": os.getpid(),
+        "host": socket.gethostname(),
+        "start": _process_start(os.getpid()),
+        "since": time.strftime("%Y-%m-%d %H:%M:%S"),
+    }
     for _ in range(20):
         try:
             fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
@@ -173,12 +178,17 @@ def folder_lock(folder: str | Path, option: str = "--out") -> Iterator[Path]:
                 info = {}
             if isinstance(info, dict) and _lock_owner_alive(info):
                 raise InputError(
-                    option, str(folder), "a folder no other upd run is writing to",
+                    option,
+                    str(folder),
+                    "a folder no other upd run is writing to",
                     f"in use by process {info.get('pid')} since {info.get('since', '?')}; "
-                    "wait for it to end or choose another folder") from None
+                    "wait for it to end or choose another folder",
+                ) from None
             logging.getLogger(__name__).warning(
-                "removing the stale lock of %s (process %s no longer runs)", folder,
-                info.get("pid", "?") if isinstance(info, dict) else "?")
+                "removing the stale lock of %s (process %s no longer runs)",
+                folder,
+                info.get("pid", "?") if isinstance(info, dict) else "?",
+            )
             try:
                 lock.unlink()
             except FileNotFoundError:
@@ -188,8 +198,9 @@ def folder_lock(folder: str | Path, option: str = "--out") -> Iterator[Path]:
             fh.write(json.dumps(me) + "\n")
         break
     else:
-        raise InputError(option, str(folder), "a folder whose lock can be taken",
-                         f"could not take {lock}")
+        raise InputError(
+            option, str(folder), "a folder whose lock can be taken", f"could not take {lock}"
+        )
     try:
         yield lock
     finally:

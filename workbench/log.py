@@ -78,8 +78,9 @@ def bars_enabled() -> bool:
 
 
 # whole numbers even when a bar counts a float quantity (the Hz of a band)
-_FORMAT = ("{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} {unit} "
-           "[{elapsed}<{remaining}{postfix}]")
+_FORMAT = (
+    "{desc}: {percentage:3.0f}%|{bar}| {n:.0f}/{total:.0f} {unit} [{elapsed}<{remaining}{postfix}]"
+)
 
 
 def progress(
@@ -91,8 +92,15 @@ def progress(
     if total is None and hasattr(iterable, "__len__"):
         total = len(iterable)  # type: ignore[arg-type]
     yield from tqdm(
-        iterable, desc=desc, total=total, unit=unit, file=sys.stderr,
-        disable=not bars_enabled(), mininterval=0.5, dynamic_ncols=True, leave=False,
+        iterable,
+        desc=desc,
+        total=total,
+        unit=unit,
+        file=sys.stderr,
+        disable=not bars_enabled(),
+        mininterval=0.5,
+        dynamic_ncols=True,
+        leave=False,
         bar_format=_FORMAT if total is not None else None,
     )
 
@@ -107,8 +115,15 @@ def progress_bar(desc: str, total: float, unit: str = "item"):
     from tqdm import tqdm
 
     bar = tqdm(
-        desc=desc, total=total, unit=unit, file=sys.stderr, disable=not bars_enabled(),
-        mininterval=0.5, dynamic_ncols=True, leave=False, bar_format=_FORMAT,
+        desc=desc,
+        total=total,
+        unit=unit,
+        file=sys.stderr,
+        disable=not bars_enabled(),
+        mininterval=0.5,
+        dynamic_ncols=True,
+        leave=False,
+        bar_format=_FORMAT,
     )
     try:
         yield bar

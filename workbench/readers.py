@@ -44,8 +44,20 @@ from .errors import InputError, did_you_mean
 
 Label = tuple[int, int]
 
-_COMPONENT_NAMES = {"UX": 1, "UY": 2, "UZ": 3, "ROTX": 4, "ROTY": 5, "ROTZ": 6,
-                    "RX": 4, "RY": 5, "RZ": 6, "X": 1, "Y": 2, "Z": 3}
+_COMPONENT_NAMES = {
+    "UX": 1,
+    "UY": 2,
+    "UZ": 3,
+    "ROTX": 4,
+    "ROTY": 5,
+    "ROTZ": 6,
+    "RX": 4,
+    "RY": 5,
+    "RZ": 6,
+    "X": 1,
+    "Y": 2,
+    "Z": 3,
+}
 OP4_SUFFIXES = (".op4",)
 DMIG_SUFFIXES = (".pch", ".dmig", ".bdf", ".dat", ".blk")
 HB_SUFFIXES = (".rua", ".rsa", ".rb", ".hb", ".hbf")
@@ -75,7 +87,8 @@ class MatrixSet:
         """The row index of ``(node, component)``; InputError naming ``param`` if absent."""
         if self.labels is None:
             raise InputError(
-                param, [node, component],
+                param,
+                [node, component],
                 "DOF indices (the matrix file has no node labels; give model.dof_map)",
             )
         lookup = self._lookup
@@ -85,7 +98,8 @@ class MatrixSet:
             nodes = sorted({n for n, _ in self.labels})
             comps = sorted(c for n, c in self.labels if n == node)
             allowed = (
-                f"a component of node {node} in {self.source}: {comps}" if comps
+                f"a component of node {node} in {self.source}: {comps}"
+                if comps
                 else f"a node of {self.source} ({len(nodes)} nodes, {nodes[0]}..{nodes[-1]})"
             )
             raise InputError(param, [node, component], allowed) from None
@@ -167,11 +181,16 @@ def read_dmig(path: str | Path) -> tuple[dict[str, Any], tuple[Label, ...]]:
     try:
         model = read_bdf(str(path), punch=True, xref=False, debug=None, log=_quiet_log())
     except Exception as e:
-        raise InputError("model.matrices", str(path), "a Nastran punch file with DMIG cards",
-                         str(e)) from None
+        raise InputError(
+            "model.matrices", str(path), "a Nastran punch file with DMIG cards", str(e)
+        ) from None
     if not model.dmig:
-        raise InputError("model.matrices", str(path), "a Nastran punch file with DMIG cards",
-                         "no DMIG card found")
+        raise InputError(
+            "model.matrices",
+            str(path),
+            "a Nastran punch file with DMIG cards",
+            "no DMIG card found",
+        )
     parts: dict[str, tuple[Any, list[Label], list[Label]]] = {}
     for name, card in model.dmig.items():
         if not hasattr(card, "get_matrix"):
@@ -208,9 +227,11 @@ def read_abaqus_mtx(path: str | Path) -> tuple[Any, tuple[Label, ...]]:
             continue
         parts = s.replace(",", " ").split()
         if len(parts) != 5:
-            raise InputError(f"{path.name} line {k}", s,
-                             "'row node, row dof, column node, column dof, value' "
-                             "(Abaqus MATRIX INPUT)")
+            raise InputError(
+                f"{path.name} line {k}",
+                s,
+                "'row node, row dof, column node, column dof, value' (Abaqus MATRIX INPUT)",
+            )
         try:
             a, b, c, d = (int(p) for p in parts[:4])
             v = float(parts[4].replace("D", "E").replace("d", "e"))
@@ -235,9 +256,12 @@ def _complete_symmetric(r, c, v, n, path) -> sp.csr_matrix:
         r, c = np.concatenate([r, c[off]]), np.concatenate([c, r[off]])
         v = np.concatenate([v, v[off]])
     elif mirrored != len(pairs):
-        raise InputError("model.matrices", str(path),
-                         "one triangle of a symmetric matrix or the full square matrix",
-                         f"{mirrored} of {len(pairs)} off-diagonal entries have their mirror")
+        raise InputError(
+            "model.matrices",
+            str(path),
+            "one triangle of a symmetric matrix or the full square matrix",
+            f"{mirrored} of {len(pairs)} off-diagonal entries have their mirror",
+        )
     m = sp.coo_matrix((v, (r, c)), shape=(n, n)).tocsr()
     m.sum_duplicates()
     return m
@@ -270,8 +294,9 @@ def read_harwell_boeing(path: str | Path) -> sp.csr_matrix:
     try:
         m = scipy.io.hb_read(io.StringIO("".join(lines))).tocsr()
     except (ValueError, IndexError) as e:
-        raise InputError("model.matrices", str(path),
-                         "a real assembled Harwell-Boeing file (RUA or RSA)", str(e)) from None
+        raise InputError(
+            "model.matrices", str(path), "a real assembled Harwell-Boeing file (RUA or RSA)", str(e)
+        ) from None
     if symmetric:
         m = (m + m.T - sp.diags(m.diagonal())).tocsr()
     return m
@@ -346,27 +371,37 @@ def read_matrices(
         arrays, labels = cache[path]
         if not name:
             if len(arrays) != 1:
-                raise InputError(f"model.{role}", str(spec),
-                                 f"'{path.name}#NAME' with NAME one of " + ", ".join(arrays))
+                raise InputError(
+                    f"model.{role}",
+                    str(spec),
+                    f"'{path.name}#NAME' with NAME one of " + ", ".join(arrays),
+                )
             name = next(iter(arrays))
         if name not in arrays:
-            raise InputError(f"model.{role}", str(spec),
-                             f"a matrix of {path.name}: " + ", ".join(sorted(arrays)),
-                             did_you_mean(name, arrays))
+            raise InputError(
+                f"model.{role}",
+                str(spec),
+                f"a matrix of {path.name}: " + ", ".join(sorted(arrays)),
+                did_you_mean(name, arrays),
+            )
         got[role] = (arrays[name], labels)
     labelled = [lab for _, lab in got.values() if lab is not None]
     source = ", ".join(sorted({p.name for p in cache}))
     if labelled:
         if dof_map:
-            raise InputError("model.dof_map", str(dof_map), "empty",
-                             f"{source} carries its own node labels")
+            raise InputError(
+                "model.dof_map", str(dof_map), "empty", f"{source} carries its own node labels"
+            )
         union = tuple(sorted({lab for labs in labelled for lab in labs}))
         index = {lab: i for i, lab in enumerate(union)}
         out = {}
         for role, (m, labs) in got.items():
             if labs is None:
-                raise InputError(f"model.{role}", str(files[role]),
-                                 "a file with node labels like the others (DMIG or Abaqus)")
+                raise InputError(
+                    f"model.{role}",
+                    str(files[role]),
+                    "a file with node labels like the others (DMIG or Abaqus)",
+                )
             out[role] = _relabel(m, labs, index, len(union))
         return MatrixSet(out, union, source)
     sizes = {role: m.shape for role, (m, _) in got.items()}
@@ -380,8 +415,9 @@ def read_matrices(
     if dof_map:
         labels = read_dof_map(dof_map)
         if len(labels) != n:
-            raise InputError("model.dof_map", str(dof_map), f"{n} rows (one per DOF)",
-                             f"it has {len(labels)}")
+            raise InputError(
+                "model.dof_map", str(dof_map), f"{n} rows (one per DOF)", f"it has {len(labels)}"
+            )
     return MatrixSet({role: m for role, (m, _) in got.items()}, labels, source)
 
 

@@ -108,13 +108,19 @@ class ReducedModel:
         with h5py.File(path, "r") as h:
             a = h.attrs
             return cls(
-                name=str(a["name"]), kind=str(a["kind"]),
-                K=h["K"][()], M=h["M"][()], T=h["T"][()],
+                name=str(a["name"]),
+                kind=str(a["kind"]),
+                K=h["K"][()],
+                M=h["M"][()],
+                T=h["T"][()],
                 node_coords=h["node_coords"][()],
                 node_sets={k: v[()] for k, v in h["node_sets"].items()},
-                mode_freqs_hz=h["mode_freqs_hz"][()], ref_point=h["ref_point"][()],
-                inputs=json.loads(a["inputs"]), digest=str(a["digest"]),
-                code_version=str(a["code_version"]), n_full_dofs=int(a["n_full_dofs"]),
+                mode_freqs_hz=h["mode_freqs_hz"][()],
+                ref_point=h["ref_point"][()],
+                inputs=json.loads(a["inputs"]),
+                digest=str(a["digest"]),
+                code_version=str(a["code_version"]),
+                n_full_dofs=int(a["n_full_dofs"]),
                 timings=json.loads(a["timings"]),
             )
 

@@ -18,20 +18,29 @@ from .geometry.params import DAMPERS
 
 # the robustness study's solution methods: name -> (SolverOptions overrides, description)
 METHODS: dict[str, tuple[dict[str, Any], str]] = {
-    "default": ({}, "analytic Jacobian, bt line search, arc length, secant predictor, "
-                    "adaptive step (the options of every other study)"),
+    "default": (
+        {},
+        "analytic Jacobian, bt line search, arc length, secant predictor, "
+        "adaptive step (the options of every other study)",
+    ),
     "fd-jacobian": ({"jacobian": "fd"}, "finite-difference Jacobian (dense, column by column)"),
     "ls-basic": ({"line_search": "basic"}, "full Newton steps (SNES line search basic)"),
     "ls-l2": ({"line_search": "l2"}, "SNES line search l2"),
     "ls-cp": ({"line_search": "cp"}, "SNES line search cp (critical point)"),
     "tangent-predictor": ({"predictor": "tangent"}, "tangent predictor instead of secant"),
-    "constant-predictor": ({"predictor": "constant"},
-                           "constant predictor (Newton starts at the last point)"),
-    "fixed-step": ({"ds0": 0.01, "ds_min": 0.01, "ds_max": 0.01, "max_points": 3000},
-                   "a fixed small arc-length step 0.01, never adapted (no halving on failure; "
-                   "a budget of 3000 points instead of the study's max-points)"),
-    "frequency-stepping": ({"continuation": "frequency"},
-                           "plain frequency stepping (adaptive), no arc length"),
+    "constant-predictor": (
+        {"predictor": "constant"},
+        "constant predictor (Newton starts at the last point)",
+    ),
+    "fixed-step": (
+        {"ds0": 0.01, "ds_min": 0.01, "ds_max": 0.01, "max_points": 3000},
+        "a fixed small arc-length step 0.01, never adapted (no halving on failure; "
+        "a budget of 3000 points instead of the study's max-points)",
+    ),
+    "frequency-stepping": (
+        {"continuation": "frequency"},
+        "plain frequency stepping (adaptive), no arc length",
+    ),
 }
 
 
@@ -49,26 +58,50 @@ class HardCase:
 # the robustness study's hard cases (workbench/studies/robustness.py solves them)
 CASES: dict[str, HardCase] = {
     "near-separation": HardCase(
-        "cone", 0.0, 9.6, {"cf": 1000.0},
+        "cone",
+        0.0,
+        9.6,
+        {"cf": 1000.0},
         "in-phase cone, centrifugal load 1 kN (a tenth of the default): the preload N0 is "
-        "small against the dynamic normal load, the pairs open for part of the period"),
+        "small against the dynamic normal load, the pairs open for part of the period",
+    ),
     "high-kt-ratio": HardCase(
-        "cone", 180.0, 9.6, {"kt-line": 6.0e11, "mu": 0.1},
+        "cone",
+        180.0,
+        9.6,
+        {"kt-line": 6.0e11, "mu": 0.1},
         "out-of-phase cone, tangential stiffness x10 and friction coefficient / 5: "
-        "kt / (mu N0) is 50 times the default, the slip displacement 50 times smaller"),
+        "kt / (mu N0) is 50 times the default, the slip displacement 50 times smaller",
+    ),
     "high-force": HardCase(
-        "cone", 180.0, 60.0, {},
-        "out-of-phase cone at 60 N, twice the paper's highest level (gross slip)"),
+        "cone",
+        180.0,
+        60.0,
+        {},
+        "out-of-phase cone at 60 N, twice the paper's highest level (gross slip)",
+    ),
     "wedge-in-phase": HardCase(
-        "wedge", 0.0, 30.0, {},
-        "in-phase wedge at 30 N: the faces separate (partly) around the peak"),
+        "wedge",
+        0.0,
+        30.0,
+        {},
+        "in-phase wedge at 30 N: the faces separate (partly) around the peak",
+    ),
     "turning-point": HardCase(
-        "cone", 0.0, 30.0, {"damping": 5e-4},
+        "cone",
+        0.0,
+        30.0,
+        {"damping": 5e-4},
         "in-phase cone at 30 N with damping 0.05 %: the curve folds (softening with "
-        "separation) in a narrow frequency range, so plain frequency stepping must jump"),
+        "separation) in a narrow frequency range, so plain frequency stepping must jump",
+    ),
     "light-damping": HardCase(
-        "cone", 180.0, 9.6, {"damping": 1e-4},
-        "out-of-phase cone with modal damping 0.01 %: a sharp, friction-dominated peak"),
+        "cone",
+        180.0,
+        9.6,
+        {"damping": 1e-4},
+        "out-of-phase cone with modal damping 0.01 %: a sharp, friction-dominated peak",
+    ),
 }
 
 
@@ -103,136 +136,431 @@ class Option:
 OPTIONS: tuple[Option, ...] = (
     # what to compute
     Option("name", "str", "study", "a name for the study (report title, file names)", "study"),
-    Option("kind", "str", "comparison", "what the report shows: " + ", ".join(KINDS), "study",
-           choices=KINDS),
+    Option(
+        "kind",
+        "str",
+        "comparison",
+        "what the report shows: " + ", ".join(KINDS),
+        "study",
+        choices=KINDS,
+    ),
     Option("dampers", "strs", list(DAMPERS), "dampers to compare", "cases", choices=DAMPERS),
-    Option("phases", "floats", [0.0, 180.0],
-           "inter-blade phase angles, deg (0 in-phase, 180 out-of-phase)", "cases",
-           lo=-360.0, hi=360.0),
-    Option("forces", "floats", [0.096, 3.84, 9.6, 15.0, 20.0, 25.0, 30.0],
-           "excitation force amplitudes on each blade, N", "cases", lo=0.0, lo_open=True),
-    Option("response-blade", "int", 1, "blade whose response is reported (1 or 2)", "cases",
-           lo=1, hi=2),
+    Option(
+        "phases",
+        "floats",
+        [0.0, 180.0],
+        "inter-blade phase angles, deg (0 in-phase, 180 out-of-phase)",
+        "cases",
+        lo=-360.0,
+        hi=360.0,
+    ),
+    Option(
+        "forces",
+        "floats",
+        [0.096, 3.84, 9.6, 15.0, 20.0, 25.0, 30.0],
+        "excitation force amplitudes on each blade, N",
+        "cases",
+        lo=0.0,
+        lo_open=True,
+    ),
+    Option(
+        "response-blade", "int", 1, "blade whose response is reported (1 or 2)", "cases", lo=1, hi=2
+    ),
     # frequency band
-    Option("band-in-phase", "floats", [], "band of the in-phase family [lo, hi], Hz "
-           "(empty: automatic from the linear stuck and sliding limits)", "band", lo=0.0,
-           lo_open=True),
-    Option("band-out-of-phase", "floats", [], "band of the out-of-phase family [lo, hi], Hz "
-           "(empty: automatic)", "band", lo=0.0, lo_open=True),
-    Option("band-margin", "float", 0.04, "automatic band: relative margin beyond the linear "
-           "limits", "band", lo=0.0, lo_open=True, hi=0.5),
+    Option(
+        "band-in-phase",
+        "floats",
+        [],
+        "band of the in-phase family [lo, hi], Hz "
+        "(empty: automatic from the linear stuck and sliding limits)",
+        "band",
+        lo=0.0,
+        lo_open=True,
+    ),
+    Option(
+        "band-out-of-phase",
+        "floats",
+        [],
+        "band of the out-of-phase family [lo, hi], Hz (empty: automatic)",
+        "band",
+        lo=0.0,
+        lo_open=True,
+    ),
+    Option(
+        "band-margin",
+        "float",
+        0.04,
+        "automatic band: relative margin beyond the linear limits",
+        "band",
+        lo=0.0,
+        lo_open=True,
+        hi=0.5,
+    ),
     # contact and loads (None: geometry/contact.toml)
     Option("mu", "float", None, "friction coefficient", "contact", lo=0.0, hi=2.0, optional=True),
-    Option("cf", "float", None, "centrifugal force on the damper, N", "contact", lo=0.0,
-           lo_open=True, optional=True),
-    Option("kt-line", "float", None, "tangential stiffness per metre of line (cone, cylinder), "
-           "N/m per m", "contact", lo=0.0, lo_open=True, optional=True),
-    Option("kn-line", "float", None, "normal stiffness per metre of line, N/m per m", "contact",
-           lo=0.0, lo_open=True, optional=True),
-    Option("kt-face", "float", None, "tangential stiffness per m^2 of face (wedge), N/m per m^2",
-           "contact", lo=0.0, lo_open=True, optional=True),
-    Option("kn-face", "float", None, "normal stiffness per m^2 of face (wedge), N/m per m^2",
-           "contact", lo=0.0, lo_open=True, optional=True),
-    Option("damping", "float", 0.002, "modal damping ratio of the assembly (stuck contacts)",
-           "contact", lo=0.0, hi=0.5),
+    Option(
+        "cf",
+        "float",
+        None,
+        "centrifugal force on the damper, N",
+        "contact",
+        lo=0.0,
+        lo_open=True,
+        optional=True,
+    ),
+    Option(
+        "kt-line",
+        "float",
+        None,
+        "tangential stiffness per metre of line (cone, cylinder), N/m per m",
+        "contact",
+        lo=0.0,
+        lo_open=True,
+        optional=True,
+    ),
+    Option(
+        "kn-line",
+        "float",
+        None,
+        "normal stiffness per metre of line, N/m per m",
+        "contact",
+        lo=0.0,
+        lo_open=True,
+        optional=True,
+    ),
+    Option(
+        "kt-face",
+        "float",
+        None,
+        "tangential stiffness per m^2 of face (wedge), N/m per m^2",
+        "contact",
+        lo=0.0,
+        lo_open=True,
+        optional=True,
+    ),
+    Option(
+        "kn-face",
+        "float",
+        None,
+        "normal stiffness per m^2 of face (wedge), N/m per m^2",
+        "contact",
+        lo=0.0,
+        lo_open=True,
+        optional=True,
+    ),
+    Option(
+        "damping",
+        "float",
+        0.002,
+        "modal damping ratio of the assembly (stuck contacts)",
+        "contact",
+        lo=0.0,
+        hi=0.5,
+    ),
     # modelling knobs (fidelity)
-    Option("mesh-size", "float", None, "global mesh size, mm (None: the geometry file's)",
-           "fidelity", lo=0.0, lo_open=True, optional=True),
-    Option("modes", "int", 12, "fixed-interface modes per body (Craig-Bampton)", "fidelity",
-           lo=0, hi=400),
-    Option("rigid-damper", "bool", False, "rigid 6-DOF damper instead of Craig-Bampton",
-           "fidelity"),
-    Option("points-per-line", "int", None, "contact points per line (cone, cylinder)",
-           "fidelity", lo=2, hi=400, optional=True),
-    Option("harmonics", "ints", [0, 1, 2, 3], "harmonics of the balance", "fidelity", lo=0,
-           hi=64),
-    Option("nt", "int", None, "AFT time samples per period (None: solver default)", "fidelity",
-           lo=4, hi=8192, optional=True),
+    Option(
+        "mesh-size",
+        "float",
+        None,
+        "global mesh size, mm (None: the geometry file's)",
+        "fidelity",
+        lo=0.0,
+        lo_open=True,
+        optional=True,
+    ),
+    Option(
+        "modes",
+        "int",
+        12,
+        "fixed-interface modes per body (Craig-Bampton)",
+        "fidelity",
+        lo=0,
+        hi=400,
+    ),
+    Option(
+        "rigid-damper", "bool", False, "rigid 6-DOF damper instead of Craig-Bampton", "fidelity"
+    ),
+    Option(
+        "points-per-line",
+        "int",
+        None,
+        "contact points per line (cone, cylinder)",
+        "fidelity",
+        lo=2,
+        hi=400,
+        optional=True,
+    ),
+    Option("harmonics", "ints", [0, 1, 2, 3], "harmonics of the balance", "fidelity", lo=0, hi=64),
+    Option(
+        "nt",
+        "int",
+        None,
+        "AFT time samples per period (None: solver default)",
+        "fidelity",
+        lo=4,
+        hi=8192,
+        optional=True,
+    ),
     # geometry
-    Option("geometry", "path", None, "TOML overriding geometry tables (rig, cone, ...)",
-           "geometry", optional=True),
-    Option("cone-angle", "float", None, "cone semi-angle, deg (None: cone.toml's)", "geometry",
-           lo=0.0, lo_open=True, hi=89.0, optional=True),
+    Option(
+        "geometry",
+        "path",
+        None,
+        "TOML overriding geometry tables (rig, cone, ...)",
+        "geometry",
+        optional=True,
+    ),
+    Option(
+        "cone-angle",
+        "float",
+        None,
+        "cone semi-angle, deg (None: cone.toml's)",
+        "geometry",
+        lo=0.0,
+        lo_open=True,
+        hi=89.0,
+        optional=True,
+    ),
     # solver
-    Option("max-points", "int", 400, "largest number of continuation points per curve",
-           "solver", lo=5, hi=100000),
+    Option(
+        "max-points",
+        "int",
+        400,
+        "largest number of continuation points per curve",
+        "solver",
+        lo=5,
+        hi=100000,
+    ),
     Option("stability", "bool", True, "Hill stability of every point", "solver"),
-    Option("nonlinear-modes", "bool", False, "comparison study: also one nonlinear mode "
-           "(backbone) per damper and family, the forced responses synthesised from it and "
-           "their check against the curves (workbench/studies/nlmodes.py)", "solver"),
+    Option(
+        "nonlinear-modes",
+        "bool",
+        False,
+        "comparison study: also one nonlinear mode "
+        "(backbone) per damper and family, the forced responses synthesised from it and "
+        "their check against the curves (workbench/studies/nlmodes.py)",
+        "solver",
+    ),
     # sweeps and the fidelity/robustness studies
-    Option("sweep", "str", None, "name of a scalar option to sweep (e.g. cf, cone-angle, mu)",
-           "sweep", optional=True),
+    Option(
+        "sweep",
+        "str",
+        None,
+        "name of a scalar option to sweep (e.g. cf, cone-angle, mu)",
+        "sweep",
+        optional=True,
+    ),
     Option("sweep-values", "floats", [], "values of the swept option", "sweep"),
-    Option("tolerance", "percent", None, "accepted error, percent ('1' or '1%%'): pick the "
-           "cheapest settings meeting it (fidelity studies)", "fidelity", lo=0.0, lo_open=True,
-           hi=100.0, optional=True),
+    Option(
+        "tolerance",
+        "percent",
+        None,
+        "accepted error, percent ('1' or '1%%'): pick the "
+        "cheapest settings meeting it (fidelity studies)",
+        "fidelity",
+        lo=0.0,
+        lo_open=True,
+        hi=100.0,
+        optional=True,
+    ),
     # ---- fidelity study options (kind = "fidelity"; workbench/studies/fidelity.py) ----
-    Option("knobs", "strs", ["mesh-size", "modes", "harmonics", "nt", "points-per-line",
-                             "rigid-damper"],
-           "knobs a fidelity study varies, one at a time about the base setting (the study's "
-           "own mesh-size, modes, ...)", "fidelity",
-           choices=("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper")),
-    Option("levels-mesh-size", "floats", [14.0, 11.0, 9.0, 7.0],
-           "fidelity: global mesh sizes to try, mm (finest = smallest)", "fidelity", lo=0.0,
-           lo_open=True),
-    Option("levels-modes", "ints", [4, 8, 12, 24, 40],
-           "fidelity: fixed-interface modes per body to try", "fidelity", lo=0, hi=400),
-    Option("levels-harmonics", "strs", ["1", "0-1", "0-3", "0-5", "0-7"],
-           "fidelity: harmonic sets to try, each 'a-b' (a range) or 'h+h+...' (a list)",
-           "fidelity"),
-    Option("levels-nt", "ints", [16, 32, 64, 128, 256, 512],
-           "fidelity: AFT time samples per period to try", "fidelity", lo=4, hi=8192),
-    Option("levels-points-per-line", "ints", [5, 11, 23, 33, 45],
-           "fidelity: contact points per line to try", "fidelity", lo=2, hi=400),
-    Option("levels-rigid-damper", "strs", ["rigid", "flexible"],
-           "fidelity: damper models to try (finest = flexible)", "fidelity",
-           choices=("rigid", "flexible")),
+    Option(
+        "knobs",
+        "strs",
+        ["mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"],
+        "knobs a fidelity study varies, one at a time about the base setting (the study's "
+        "own mesh-size, modes, ...)",
+        "fidelity",
+        choices=("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"),
+    ),
+    Option(
+        "levels-mesh-size",
+        "floats",
+        [14.0, 11.0, 9.0, 7.0],
+        "fidelity: global mesh sizes to try, mm (finest = smallest)",
+        "fidelity",
+        lo=0.0,
+        lo_open=True,
+    ),
+    Option(
+        "levels-modes",
+        "ints",
+        [4, 8, 12, 24, 40],
+        "fidelity: fixed-interface modes per body to try",
+        "fidelity",
+        lo=0,
+        hi=400,
+    ),
+    Option(
+        "levels-harmonics",
+        "strs",
+        ["1", "0-1", "0-3", "0-5", "0-7"],
+        "fidelity: harmonic sets to try, each 'a-b' (a range) or 'h+h+...' (a list)",
+        "fidelity",
+    ),
+    Option(
+        "levels-nt",
+        "ints",
+        [16, 32, 64, 128, 256, 512],
+        "fidelity: AFT time samples per period to try",
+        "fidelity",
+        lo=4,
+        hi=8192,
+    ),
+    Option(
+        "levels-points-per-line",
+        "ints",
+        [5, 11, 23, 33, 45],
+        "fidelity: contact points per line to try",
+        "fidelity",
+        lo=2,
+        hi=400,
+    ),
+    Option(
+        "levels-rigid-damper",
+        "strs",
+        ["rigid", "flexible"],
+        "fidelity: damper models to try (finest = flexible)",
+        "fidelity",
+        choices=("rigid", "flexible"),
+    ),
     # ---- robustness study options (kind = "robustness"; workbench/studies/robustness.py) ----
-    Option("methods", "strs", list(ROBUSTNESS_METHODS), "solution methods of a robustness "
-           "study (named solver variants; the first is the reference): "
-           + ", ".join(ROBUSTNESS_METHODS), "robustness", choices=ROBUSTNESS_METHODS),
-    Option("hard-cases", "strs", list(ROBUSTNESS_CASES), "hard cases of a robustness study: "
-           + ", ".join(ROBUSTNESS_CASES), "robustness", choices=ROBUSTNESS_CASES),
-    Option("peak-tolerance", "float", 1.0, "robustness: a method that converges but whose "
-           "peak amplitude differs from the first method's by more than this, percent, is a "
-           "wrong answer", "robustness", lo=0.0,
-           lo_open=True, hi=100.0),
-    Option("time-check", "bool", True, "robustness: check the harmonic balance against time "
-           "integration at its suspect points (small models)", "robustness"),
+    Option(
+        "methods",
+        "strs",
+        list(ROBUSTNESS_METHODS),
+        "solution methods of a robustness "
+        "study (named solver variants; the first is the reference): "
+        + ", ".join(ROBUSTNESS_METHODS),
+        "robustness",
+        choices=ROBUSTNESS_METHODS,
+    ),
+    Option(
+        "hard-cases",
+        "strs",
+        list(ROBUSTNESS_CASES),
+        "hard cases of a robustness study: " + ", ".join(ROBUSTNESS_CASES),
+        "robustness",
+        choices=ROBUSTNESS_CASES,
+    ),
+    Option(
+        "peak-tolerance",
+        "float",
+        1.0,
+        "robustness: a method that converges but whose "
+        "peak amplitude differs from the first method's by more than this, percent, is a "
+        "wrong answer",
+        "robustness",
+        lo=0.0,
+        lo_open=True,
+        hi=100.0,
+    ),
+    Option(
+        "time-check",
+        "bool",
+        True,
+        "robustness: check the harmonic balance against time "
+        "integration at its suspect points (small models)",
+        "robustness",
+    ),
     # ---- uncertainty study options (kind = "uncertainty"; workbench/studies/uncertainty.py) --
     # a distribution is "uniform LO HI", "normal MEAN SD [LO HI]" or
     # "lognormal MEDIAN SIGMA_LN [LO HI]" (bounds truncate); cf, kt, kn are factors on the
     # nominal value (study option or geometry/contact.toml), mu and damping absolute values,
     # seat-tilt the misalignment of one side's seat, deg
-    Option("uq-inputs", "strs", ["mu", "cf", "kt", "kn", "damping", "seat-tilt"],
-           "uncertainty: the inputs that vary (the others stay nominal)", "uncertainty",
-           choices=("mu", "cf", "kt", "kn", "damping", "seat-tilt")),
-    Option("uq-mu", "str", "normal 0.5 0.1 0.25 0.75", "uncertainty: friction coefficient",
-           "uncertainty"),
-    Option("uq-cf", "str", "normal 1 0.1 0.7 1.3", "uncertainty: factor on the nominal "
-           "centrifugal force", "uncertainty"),
-    Option("uq-kt", "str", "lognormal 1 0.5 0.25 4", "uncertainty: factor on the nominal "
-           "tangential contact stiffness (line and face)", "uncertainty"),
-    Option("uq-kn", "str", "lognormal 1 0.5 0.25 4", "uncertainty: factor on the nominal "
-           "normal contact stiffness (line and face)", "uncertainty"),
-    Option("uq-damping", "str", "lognormal 0.002 0.3 0.001 0.004", "uncertainty: modal "
-           "damping ratio", "uncertainty"),
-    Option("uq-seat-tilt", "str", "normal 0 0.01 -0.03 0.03", "uncertainty: seat "
-           "misalignment of one side, deg (tilts the preload along the line or face; "
-           "opens one end when large)", "uncertainty"),
-    Option("uq-samples", "int", 16, "uncertainty: base samples N per damper and family "
-           "(Saltelli design: N (D + 2) cases; a power of 2; a larger N reuses a smaller)",
-           "uncertainty", lo=2, hi=1 << 20),
-    Option("uq-seed", "int", 2026, "uncertainty: seed of the scrambled Sobol sequence",
-           "uncertainty", lo=0, hi=2**31 - 1),
-    Option("uq-threshold", "float", None, "uncertainty: peak amplitude threshold, mm (the "
-           "report gives the probability of exceeding it; None: per family, 1.2 x the "
-           "median peak of every damper's samples)", "uncertainty", lo=0.0, lo_open=True,
-           optional=True),
-    Option("uq-schedule", "str", "dynamic", "uncertainty: how samples spread over MPI ranks: "
-           "dynamic (a shared counter, each rank takes the next sample when free) or static "
-           "(round-robin, for comparison)", "uncertainty", choices=("dynamic", "static")),
+    Option(
+        "uq-inputs",
+        "strs",
+        ["mu", "cf", "kt", "kn", "damping", "seat-tilt"],
+        "uncertainty: the inputs that vary (the others stay nominal)",
+        "uncertainty",
+        choices=("mu", "cf", "kt", "kn", "damping", "seat-tilt"),
+    ),
+    Option(
+        "uq-mu",
+        "str",
+        "normal 0.5 0.1 0.25 0.75",
+        "uncertainty: friction coefficient",
+        "uncertainty",
+    ),
+    Option(
+        "uq-cf",
+        "str",
+        "normal 1 0.1 0.7 1.3",
+        "uncertainty: factor on the nominal centrifugal force",
+        "uncertainty",
+    ),
+    Option(
+        "uq-kt",
+        "str",
+        "lognormal 1 0.5 0.25 4",
+        "uncertainty: factor on the nominal tangential contact stiffness (line and face)",
+        "uncertainty",
+    ),
+    Option(
+        "uq-kn",
+        "str",
+        "lognormal 1 0.5 0.25 4",
+        "uncertainty: factor on the nominal normal contact stiffness (line and face)",
+        "uncertainty",
+    ),
+    Option(
+        "uq-damping",
+        "str",
+        "lognormal 0.002 0.3 0.001 0.004",
+        "uncertainty: modal damping ratio",
+        "uncertainty",
+    ),
+    Option(
+        "uq-seat-tilt",
+        "str",
+        "normal 0 0.01 -0.03 0.03",
+        "uncertainty: seat "
+        "misalignment of one side, deg (tilts the preload along the line or face; "
+        "opens one end when large)",
+        "uncertainty",
+    ),
+    Option(
+        "uq-samples",
+        "int",
+        16,
+        "uncertainty: base samples N per damper and family "
+        "(Saltelli design: N (D + 2) cases; a power of 2; a larger N reuses a smaller)",
+        "uncertainty",
+        lo=2,
+        hi=1 << 20,
+    ),
+    Option(
+        "uq-seed",
+        "int",
+        2026,
+        "uncertainty: seed of the scrambled Sobol sequence",
+        "uncertainty",
+        lo=0,
+        hi=2**31 - 1,
+    ),
+    Option(
+        "uq-threshold",
+        "float",
+        None,
+        "uncertainty: peak amplitude threshold, mm (the "
+        "report gives the probability of exceeding it; None: per family, 1.2 x the "
+        "median peak of every damper's samples)",
+        "uncertainty",
+        lo=0.0,
+        lo_open=True,
+        optional=True,
+    ),
+    Option(
+        "uq-schedule",
+        "str",
+        "dynamic",
+        "uncertainty: how samples spread over MPI ranks: "
+        "dynamic (a shared counter, each rank takes the next sample when free) or static "
+        "(round-robin, for comparison)",
+        "uncertainty",
+        choices=("dynamic", "static"),
+    ),
 )
 
 

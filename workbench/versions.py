@@ -8,8 +8,17 @@ import platform
 from . import __version__
 
 _MODULES = (
-    "numpy", "scipy", "dolfinx", "petsc4py", "slepc4py", "mpi4py", "gmsh", "h5py",
-    "matplotlib", "pyvista", "vtk",
+    "numpy",
+    "scipy",
+    "dolfinx",
+    "petsc4py",
+    "slepc4py",
+    "mpi4py",
+    "gmsh",
+    "h5py",
+    "matplotlib",
+    "pyvista",
+    "vtk",
 )
 
 

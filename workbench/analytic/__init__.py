@@ -41,8 +41,19 @@ from .rigid import (
 )
 
 __all__ = [
-    "ConeDesign", "PaperKinematics", "alpha1_deg", "check_cone_angle", "inclination_deg",
-    "longitudinal_slip_ratio", "max_slip_ratio", "paper_kinematics", "section_slip_ratio",
-    "ConeInGroove", "RigidBodyKinematics", "groove_geometry", "in_phase_motion",
-    "rigid_body_kinematics", "sweep_cone_angle",
+    "ConeDesign",
+    "PaperKinematics",
+    "alpha1_deg",
+    "check_cone_angle",
+    "inclination_deg",
+    "longitudinal_slip_ratio",
+    "max_slip_ratio",
+    "paper_kinematics",
+    "section_slip_ratio",
+    "ConeInGroove",
+    "RigidBodyKinematics",
+    "groove_geometry",
+    "in_phase_motion",
+    "rigid_body_kinematics",
+    "sweep_cone_angle",
 ]

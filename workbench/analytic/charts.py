@@ -91,8 +91,12 @@ def _with(values: tuple[float, ...], extra: float) -> list[float]:
 
 def inclination_table(design: ConeDesign, step_deg: float = 0.25) -> Table:
     """Inclination gamma and alpha_1 vs cone angle, beta 36, 45, 60 deg and the design (Fig. 3)."""
-    cols: dict[str, list] = {"beta_deg": [], "cone_angle_deg": [], "gamma_deg": [],
-                             "alpha1_deg": []}
+    cols: dict[str, list] = {
+        "beta_deg": [],
+        "cone_angle_deg": [],
+        "gamma_deg": [],
+        "alpha1_deg": [],
+    }
     for beta in _with(PAPER_BETAS_DEG, design.beta_deg):
         ac = cone_angle_grid(beta, step_deg)
         g = _gamma(np.radians(ac), np.radians(beta))
@@ -100,8 +104,11 @@ def inclination_table(design: ConeDesign, step_deg: float = 0.25) -> Table:
         cols["cone_angle_deg"].append(ac)
         cols["gamma_deg"].append(np.degrees(g))
         cols["alpha1_deg"].append(np.degrees(_alpha1(g, np.radians(beta))))
-    return Table("inclination_vs_cone_angle", "Damper inclination vs cone angle (paper Fig. 3)",
-                 {k: np.concatenate(v) for k, v in cols.items()})
+    return Table(
+        "inclination_vs_cone_angle",
+        "Damper inclination vs cone angle (paper Fig. 3)",
+        {k: np.concatenate(v) for k, v in cols.items()},
+    )
 
 
 def slip_along_table(design: ConeDesign, n_points: int = 41) -> Table:
@@ -111,9 +118,18 @@ def slip_along_table(design: ConeDesign, n_points: int = 41) -> Table:
     rigid-body slip on each line (longitudinal, transverse, magnitude).
     Cone angles at or above ``beta_deg`` are left out.
     """
-    cols: dict[str, list] = {k: [] for k in (
-        "cone_angle_deg", "side", "position_mm", "slip_ratio_paper",
-        "longitudinal_slip_ratio_3d", "transverse_slip_ratio_3d", "slip_ratio_3d")}
+    cols: dict[str, list] = {
+        k: []
+        for k in (
+            "cone_angle_deg",
+            "side",
+            "position_mm",
+            "slip_ratio_paper",
+            "longitudinal_slip_ratio_3d",
+            "transverse_slip_ratio_3d",
+            "slip_ratio_3d",
+        )
+    }
     for ac in _with(PAPER_CONE_ANGLES_DEG, design.cone_angle_deg):
         if ac >= design.beta_deg:
             continue
@@ -128,8 +144,11 @@ def slip_along_table(design: ConeDesign, n_points: int = 41) -> Table:
             cols["longitudinal_slip_ratio_3d"].append(kin.longitudinal[k])
             cols["transverse_slip_ratio_3d"].append(kin.transverse[k])
             cols["slip_ratio_3d"].append(kin.slip_ratio[k])
-    return Table("slip_along_damper", "Kinematic slip along the damper (paper Fig. 5)",
-                 {k: np.concatenate(v) for k, v in cols.items()})
+    return Table(
+        "slip_along_damper",
+        "Kinematic slip along the damper (paper Fig. 5)",
+        {k: np.concatenate(v) for k, v in cols.items()},
+    )
 
 
 def max_slip_table(design: ConeDesign, step_deg: float = 0.25) -> Table:
@@ -139,16 +158,32 @@ def max_slip_table(design: ConeDesign, step_deg: float = 0.25) -> Table:
     values. Paper eq 6 and the exact 3-D result (transverse and total).
     """
     cases = (
-        [("beta", design.replace(beta_deg=b, cone_angle_deg=0.0))
-         for b in _with(PAPER_BETAS_DEG, design.beta_deg)]
-        + [("r1", design.replace(r1_mm=r, cone_angle_deg=0.0))
-           for r in _with(PAPER_R1S_MM, design.r1_mm)]
-        + [("length", design.replace(length_mm=L, cone_angle_deg=0.0))
-           for L in _with(PAPER_LENGTHS_MM, design.length_mm)]
+        [
+            ("beta", design.replace(beta_deg=b, cone_angle_deg=0.0))
+            for b in _with(PAPER_BETAS_DEG, design.beta_deg)
+        ]
+        + [
+            ("r1", design.replace(r1_mm=r, cone_angle_deg=0.0))
+            for r in _with(PAPER_R1S_MM, design.r1_mm)
+        ]
+        + [
+            ("length", design.replace(length_mm=L, cone_angle_deg=0.0))
+            for L in _with(PAPER_LENGTHS_MM, design.length_mm)
+        ]
     )
-    cols: dict[str, list] = {k: [] for k in (
-        "family", "beta_deg", "r1_mm", "length_mm", "cone_angle_deg", "max_slip_ratio_paper",
-        "max_transverse_slip_ratio_3d", "max_slip_ratio_3d")}
+    cols: dict[str, list] = {
+        k: []
+        for k in (
+            "family",
+            "beta_deg",
+            "r1_mm",
+            "length_mm",
+            "cone_angle_deg",
+            "max_slip_ratio_paper",
+            "max_transverse_slip_ratio_3d",
+            "max_slip_ratio_3d",
+        )
+    }
     for family, d in cases:
         ac = cone_angle_grid(d.beta_deg, step_deg)
         exact = sweep_cone_angle(ac, d.beta_deg, d.r1_mm, d.length_mm)
@@ -160,9 +195,11 @@ def max_slip_table(design: ConeDesign, step_deg: float = 0.25) -> Table:
         cols["max_slip_ratio_paper"].append(_max_slip(ac, d.beta_deg, d.r1_mm, d.length_mm))
         cols["max_transverse_slip_ratio_3d"].append(exact["max_transverse_slip_ratio"])
         cols["max_slip_ratio_3d"].append(exact["max_slip_ratio"])
-    return Table("max_slip_vs_cone_angle",
-                 "Largest kinematic slip vs cone angle (paper Fig. 6)",
-                 {k: np.concatenate(v) for k, v in cols.items()})
+    return Table(
+        "max_slip_vs_cone_angle",
+        "Largest kinematic slip vs cone angle (paper Fig. 6)",
+        {k: np.concatenate(v) for k, v in cols.items()},
+    )
 
 
 def comparison_table(design: ConeDesign, step_deg: float = 0.25) -> Table:
@@ -177,16 +214,20 @@ def comparison_table(design: ConeDesign, step_deg: float = 0.25) -> Table:
         ok = paper > 1e-12
         rt = np.where(ok, exact["max_transverse_slip_ratio"] / np.where(ok, paper, 1.0), np.nan)
         rtot = np.where(ok, exact["max_slip_ratio"] / np.where(ok, paper, 1.0), np.nan)
-    return Table("paper_vs_3d", "Paper eq 6 vs exact 3-D rigid-body slip", {
-        "cone_angle_deg": ac,
-        "max_slip_ratio_paper": paper,
-        "max_transverse_slip_ratio_3d": exact["max_transverse_slip_ratio"],
-        "max_longitudinal_slip_ratio_3d": exact["max_longitudinal_slip_ratio"],
-        "max_slip_ratio_3d": exact["max_slip_ratio"],
-        "transverse_3d_over_paper": rt,
-        "total_3d_over_paper": rtot,
-        "difference_3d_minus_paper": exact["max_slip_ratio"] - paper,
-    })
+    return Table(
+        "paper_vs_3d",
+        "Paper eq 6 vs exact 3-D rigid-body slip",
+        {
+            "cone_angle_deg": ac,
+            "max_slip_ratio_paper": paper,
+            "max_transverse_slip_ratio_3d": exact["max_transverse_slip_ratio"],
+            "max_longitudinal_slip_ratio_3d": exact["max_longitudinal_slip_ratio"],
+            "max_slip_ratio_3d": exact["max_slip_ratio"],
+            "transverse_3d_over_paper": rt,
+            "total_3d_over_paper": rtot,
+            "difference_3d_minus_paper": exact["max_slip_ratio"] - paper,
+        },
+    )
 
 
 def contact_slip_table(design: ConeDesign, n_points: int = 23) -> Table:
@@ -195,16 +236,24 @@ def contact_slip_table(design: ConeDesign, n_points: int = 23) -> Table:
     n = kin.position_mm.size
     pts = kin.points_mm.reshape(-1, 3)
     glob = np.einsum("kij,kni->knj", kin.geometry.frames, kin.slip_ratio_local).reshape(-1, 3)
-    return Table("contact_line_slip_3d", "Slip at the contact points (exact 3-D)", {
-        "side": np.repeat([0, 1], n),
-        "position_mm": np.tile(kin.position_mm, 2),
-        "x_mm": pts[:, 0], "y_mm": pts[:, 1], "z_mm": pts[:, 2],
-        "slip_x_ratio": glob[:, 0], "slip_y_ratio": glob[:, 1], "slip_z_ratio": glob[:, 2],
-        "longitudinal_slip_ratio": kin.longitudinal.ravel(),
-        "transverse_slip_ratio": kin.transverse.ravel(),
-        "slip_ratio": kin.slip_ratio.ravel(),
-        "slip_ratio_paper": np.tile(section_slip_ratio(design, kin.position_mm), 2),
-    })
+    return Table(
+        "contact_line_slip_3d",
+        "Slip at the contact points (exact 3-D)",
+        {
+            "side": np.repeat([0, 1], n),
+            "position_mm": np.tile(kin.position_mm, 2),
+            "x_mm": pts[:, 0],
+            "y_mm": pts[:, 1],
+            "z_mm": pts[:, 2],
+            "slip_x_ratio": glob[:, 0],
+            "slip_y_ratio": glob[:, 1],
+            "slip_z_ratio": glob[:, 2],
+            "longitudinal_slip_ratio": kin.longitudinal.ravel(),
+            "transverse_slip_ratio": kin.transverse.ravel(),
+            "slip_ratio": kin.slip_ratio.ravel(),
+            "slip_ratio_paper": np.tile(section_slip_ratio(design, kin.position_mm), 2),
+        },
+    )
 
 
 def best_cone_angle(table: Table, column: str) -> tuple[float, float]:

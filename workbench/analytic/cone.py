@@ -88,16 +88,20 @@ class ConeDesign:
     """
 
     beta_deg: float = param(
-        45.0, "platform angle: between each platform contact plane and the radial direction z, deg",
-        lo=1.0, hi=89.0)  # beyond, the tangency equations are singular to round-off
+        45.0,
+        "platform angle: between each platform contact plane and the radial direction z, deg",
+        lo=1.0,
+        hi=89.0,
+    )  # beyond, the tangency equations are singular to round-off
     cone_angle_deg: float = param(
-        10.0, "cone semi-angle alpha_c, deg (0 is a cylinder; must stay below beta_deg)",
-        lo=0.0)
+        10.0, "cone semi-angle alpha_c, deg (0 is a cylinder; must stay below beta_deg)", lo=0.0
+    )
     # bounds: a damper of metres (or of nanometres) is no under-platform damper, and beyond
     # them the tangency equations are singular to round-off (1e308: exit 3, not 2)
     r1_mm: float = param(10.0, "small-end radius R1, mm", lo=1.0e-3, hi=1.0e4)
-    length_mm: float = param(40.0, "damper length L measured along its axis, mm",
-                             lo=1.0e-3, hi=1.0e4)
+    length_mm: float = param(
+        40.0, "damper length L measured along its axis, mm", lo=1.0e-3, hi=1.0e4
+    )
 
     def __post_init__(self) -> None:
         hints = typing.get_type_hints(type(self))
@@ -106,9 +110,12 @@ class ConeDesign:
                 value = check_field(f, getattr(self, f.name), "", hints[f.name])
                 object.__setattr__(self, f.name, value)
         if self.length_mm < 1e-2 * self.r1_mm:  # a disc: its tangency is singular
-            raise InputError("length_mm", self.length_mm,
-                             f"length_mm >= 0.01 r1_mm = {1e-2 * self.r1_mm:g} mm",
-                             "a thinner disc has no defined contact lines")
+            raise InputError(
+                "length_mm",
+                self.length_mm,
+                f"length_mm >= 0.01 r1_mm = {1e-2 * self.r1_mm:g} mm",
+                "a thinner disc has no defined contact lines",
+            )
         # the cone angle's range depends on beta: one message naming both
         ac = check_cone_angle(self.cone_angle_deg, self.beta_deg)
         if ac.ndim != 0:
@@ -221,8 +228,9 @@ def section_slip_ratio(design: ConeDesign, position_mm: ArrayLike) -> np.ndarray
     allowed = f"0 <= position_mm <= length_mm = {design.length_mm:g} mm"
     xi = _as_array("position_mm", position_mm, allowed)
     if ((xi < 0.0) | (xi > design.length_mm)).any():
-        raise InputError("position_mm", float(xi[(xi < 0) | (xi > design.length_mm)].flat[0]),
-                         allowed)
+        raise InputError(
+            "position_mm", float(xi[(xi < 0) | (xi > design.length_mm)].flat[0]), allowed
+        )
     r = design.r1_mm + xi * np.tan(np.radians(design.cone_angle_deg))
     return (1.0 - r / design.rm_mm) * _slip_factor(design.cone_angle_deg, design.beta_deg)
 

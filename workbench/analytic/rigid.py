@@ -119,29 +119,47 @@ class ConeInGroove:
 
 def groove_geometry(design: ConeDesign) -> ConeInGroove:
     """Place the cone of ``design`` in the groove, tangent to both planes."""
-    g = _geometry_arrays(np.array([design.cone_angle_deg]), design.beta_deg, design.r1_mm,
-                         design.length_mm)
-    return ConeInGroove(design, float(g["gamma"][0]), g["axis"][0], g["normals"][0],
-                        g["radial"][0], g["center_mid"][0], g["frames"][0])
+    g = _geometry_arrays(
+        np.array([design.cone_angle_deg]), design.beta_deg, design.r1_mm, design.length_mm
+    )
+    return ConeInGroove(
+        design,
+        float(g["gamma"][0]),
+        g["axis"][0],
+        g["normals"][0],
+        g["radial"][0],
+        g["center_mid"][0],
+        g["frames"][0],
+    )
 
 
-def _geometry_arrays(ac_deg: np.ndarray, beta_deg: float, r1_mm: float, length_mm: float
-                     ) -> dict[str, np.ndarray]:
+def _geometry_arrays(
+    ac_deg: np.ndarray, beta_deg: float, r1_mm: float, length_mm: float
+) -> dict[str, np.ndarray]:
     """The geometry of :class:`ConeInGroove` for a batch of cone angles (leading axis)."""
     ac, b = np.radians(np.asarray(ac_deg, dtype=float)), np.radians(beta_deg)
     n = ac.size
     gamma = _gamma(ac, b)
     axis = np.stack([np.zeros(n), np.cos(gamma), -np.sin(gamma)], axis=-1)  # (n, 3)
     normals = np.broadcast_to(
-        np.array([[np.cos(b), 0.0, -np.sin(b)], [-np.cos(b), 0.0, -np.sin(b)]]), (n, 2, 3))
+        np.array([[np.cos(b), 0.0, -np.sin(b)], [-np.cos(b), 0.0, -np.sin(b)]]), (n, 2, 3)
+    )
     sa, ca = np.sin(ac)[:, None, None], np.cos(ac)[:, None, None]
     radial = (sa * axis[:, None, :] - normals) / ca
     t1 = -(axis[:, None, :] - sa * normals) / ca  # along the line, large end -> small end
     frames = np.stack([t1, np.cross(normals, t1), normals], axis=2)  # (n, 2, 3 rows, 3)
     rm = r1_mm + 0.5 * length_mm * np.tan(ac)
     center_mid = np.stack([np.zeros(n), np.zeros(n), -rm * np.cos(ac) / np.sin(b)], axis=-1)
-    return dict(gamma=gamma, axis=axis, normals=np.array(normals), radial=radial,
-                frames=frames, center_mid=center_mid, rm=rm, tan_ac=np.tan(ac))
+    return dict(
+        gamma=gamma,
+        axis=axis,
+        normals=np.array(normals),
+        radial=radial,
+        frames=frames,
+        center_mid=center_mid,
+        rm=rm,
+        tan_ac=np.tan(ac),
+    )
 
 
 def in_phase_motion(v_mm: float = 1.0, split: str = "symmetric") -> np.ndarray:
@@ -246,13 +264,18 @@ def _check_disp(w: object) -> np.ndarray:
     if arr.shape != (2, 3) or not np.isfinite(arr).all():
         raise InputError("platform_disp_mm", w, allowed)
     if not np.linalg.norm(arr[0] - arr[1]) > 0.0:
-        raise InputError("platform_disp_mm", w, allowed,
-                         "equal translations move the damper rigidly: no slip to compute")
+        raise InputError(
+            "platform_disp_mm",
+            w,
+            allowed,
+            "equal translations move the damper rigidly: no slip to compute",
+        )
     return arr
 
 
-def _motion(g: dict[str, np.ndarray], length_mm: float, r1_mm: float, w: np.ndarray
-            ) -> tuple[np.ndarray, np.ndarray]:
+def _motion(
+    g: dict[str, np.ndarray], length_mm: float, r1_mm: float, w: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Rigid motion x = (u, omega) (n, 6) of a batch of geometries, and the middle residual.
 
     Rows: the displacement of material point ``p`` is ``u + omega x (p - c_m)``,
@@ -270,26 +293,31 @@ def _motion(g: dict[str, np.ndarray], length_mm: float, r1_mm: float, w: np.ndar
 
     ends = (point(0.0), point(length_mm))
     C = np.stack([rows(ends[j], normals)[:, k] for k in range(2) for j in range(2)], axis=1)
-    d = np.broadcast_to(np.array([normals[0, k] @ w[k] for k in range(2) for _ in range(2)]),
-                        (n, 4))
+    d = np.broadcast_to(
+        np.array([normals[0, k] @ w[k] for k in range(2) for _ in range(2)]), (n, 4)
+    )
     mid = point(0.5 * length_mm)
-    A = np.concatenate([rows(mid[:, k:k + 1, :], g["frames"][:, k, :2])
-                        for k in range(2)], axis=1)  # (n, 4, 6): t1, t2 of line 0, then line 1
+    A = np.concatenate(
+        [rows(mid[:, k : k + 1, :], g["frames"][:, k, :2]) for k in range(2)], axis=1
+    )  # (n, 4, 6): t1, t2 of line 0, then line 1
     b = np.einsum("nkij,kj->nki", g["frames"][:, :, :2], w).reshape(n, 4)
 
     # Tangency exactly (through the SVD of C), the rolling condition in least squares
     # on the null space of C.
     uc, s, vt = np.linalg.svd(C)
     if np.any(s[:, -1] <= 1e-10 * s[:, 0]):
-        raise SolveError(f"tangency equations are singular (singular values {s[:, -1]}); "
-                         "the damper would stand vertical")
+        raise SolveError(
+            f"tangency equations are singular (singular values {s[:, -1]}); "
+            "the damper would stand vertical"
+        )
     x0 = np.einsum("nji,nj->ni", vt[:, :4], np.einsum("nji,nj->ni", uc, d) / s)
     N = np.swapaxes(vt[:, 4:], 1, 2)  # (n, 6, 2)
     AN = A @ N
     sv = np.linalg.svd(AN, compute_uv=False)
     if np.any(sv[:, -1] <= 1e-10 * np.maximum(sv[:, 0], 1e-300)):
-        raise SolveError(f"the rolling condition does not fix the damper motion "
-                         f"(singular values {sv[:, -1]})")
+        raise SolveError(
+            f"the rolling condition does not fix the damper motion (singular values {sv[:, -1]})"
+        )
     z = np.einsum("nij,nj->ni", np.linalg.pinv(AN), b - np.einsum("nij,nj->ni", A, x0))
     x = x0 + np.einsum("nij,nj->ni", N, z)
     resid = (np.einsum("nij,nj->ni", A, x) - b).reshape(n, 2, 2)
@@ -298,10 +326,15 @@ def _motion(g: dict[str, np.ndarray], length_mm: float, r1_mm: float, w: np.ndar
 
 def _solve(geo: ConeInGroove, w: np.ndarray, xi: np.ndarray) -> RigidBodyKinematics:
     d = geo.design
-    g = {"gamma": np.array([geo.gamma_rad]), "axis": geo.axis[None], "normals": geo.normals[None],
-         "radial": geo.radial[None], "frames": geo.frames[None],
-         "center_mid": geo.center_mid[None],
-         "tan_ac": np.array([np.tan(np.radians(d.cone_angle_deg))])}
+    g = {
+        "gamma": np.array([geo.gamma_rad]),
+        "axis": geo.axis[None],
+        "normals": geo.normals[None],
+        "radial": geo.radial[None],
+        "frames": geo.frames[None],
+        "center_mid": geo.center_mid[None],
+        "tan_ac": np.array([np.tan(np.radians(d.cone_angle_deg))]),
+    }
     x, resid = _motion(g, d.length_mm, d.r1_mm, w)
     u, omega = x[0, :3], x[0, 3:]
     pts = geo.contact_points(xi)  # (2, n, 3)
@@ -309,14 +342,23 @@ def _solve(geo: ConeInGroove, w: np.ndarray, xi: np.ndarray) -> RigidBodyKinemat
     scale = float(np.linalg.norm(w[0] - w[1]))
     local = np.einsum("kij,knj->kni", geo.frames, disp) / scale
     return RigidBodyKinematics(
-        geometry=geo, platform_disp_mm=w, scale_mm=scale, translation_mm=u,
-        rotation_rad=omega, position_mm=xi, points_mm=pts, slip_ratio_local=local,
+        geometry=geo,
+        platform_disp_mm=w,
+        scale_mm=scale,
+        translation_mm=u,
+        rotation_rad=omega,
+        position_mm=xi,
+        points_mm=pts,
+        slip_ratio_local=local,
         middle_residual=resid[0] / scale,
     )
 
 
 def sweep_cone_angle(
-    cone_angle_deg: np.ndarray, beta_deg: float, r1_mm: float, length_mm: float,
+    cone_angle_deg: np.ndarray,
+    beta_deg: float,
+    r1_mm: float,
+    length_mm: float,
 ) -> dict[str, np.ndarray]:
     """3-D slip ratios for many cone angles (unit in-phase motion; ends and middle only).
 
@@ -337,16 +379,21 @@ def sweep_cone_angle(
     local = []
     for xi in (0.0, base.length_mm):
         r = base.r1_mm + xi * g["tan_ac"]
-        p = ((g["center_mid"] + (xi - 0.5 * base.length_mm) * g["axis"])[:, None, :]
-             + r[:, None, None] * g["radial"])  # (n, 2, 3)
+        p = (g["center_mid"] + (xi - 0.5 * base.length_mm) * g["axis"])[:, None, :] + r[
+            :, None, None
+        ] * g["radial"]  # (n, 2, 3)
         disp = u[:, None, :] + np.cross(omega[:, None, :], p - g["center_mid"][:, None, :]) - w
         local.append(np.einsum("nkij,nkj->nki", g["frames"], disp))
     local = np.stack(local, axis=2) / float(np.linalg.norm(w[0] - w[1]))  # (n, 2, 2 ends, 3)
     mag = np.hypot(local[..., 0], local[..., 1]).reshape(flat.size, -1)
     return {
         "max_slip_ratio": mag.max(axis=1).reshape(ac.shape),
-        "max_transverse_slip_ratio":
-            np.abs(local[..., 1]).reshape(flat.size, -1).max(axis=1).reshape(ac.shape),
-        "max_longitudinal_slip_ratio":
-            np.abs(local[..., 0]).reshape(flat.size, -1).max(axis=1).reshape(ac.shape),
+        "max_transverse_slip_ratio": np.abs(local[..., 1])
+        .reshape(flat.size, -1)
+        .max(axis=1)
+        .reshape(ac.shape),
+        "max_longitudinal_slip_ratio": np.abs(local[..., 0])
+        .reshape(flat.size, -1)
+        .max(axis=1)
+        .reshape(ac.shape),
     }

@@ -61,15 +61,21 @@ def limit_stiffness(model: AssembledModel, limit: str) -> np.ndarray:
     return model.K + (W.T @ (W.multiply(kc.reshape(-1, 1)))).toarray()
 
 
-def family_mode(model: AssembledModel, phase_deg: float, limit: str,
-                response_blade: int = 1) -> FamilyMode:
+def family_mode(
+    model: AssembledModel, phase_deg: float, limit: str, response_blade: int = 1
+) -> FamilyMode:
     """The mode that dominates the response to the excitation at ``phase_deg``."""
-    return family_frequency(model.M, limit_stiffness(model, limit), model.excitation(phase_deg),
-                            model.response_dofs[response_blade - 1])
+    return family_frequency(
+        model.M,
+        limit_stiffness(model, limit),
+        model.excitation(phase_deg),
+        model.response_dofs[response_blade - 1],
+    )
 
 
-def auto_band(model: AssembledModel, phase_deg: float, margin: float,
-              response_blade: int = 1) -> tuple[float, float, dict[str, float]]:
+def auto_band(
+    model: AssembledModel, phase_deg: float, margin: float, response_blade: int = 1
+) -> tuple[float, float, dict[str, float]]:
     """A band holding the family's stuck and sliding resonances, widened by ``margin``."""
     fs = family_mode(model, phase_deg, "stuck", response_blade).freq_hz
     fl = family_mode(model, phase_deg, "sliding", response_blade).freq_hz

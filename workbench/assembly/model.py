@@ -122,7 +122,9 @@ def assemble(
     dc = np.asarray(damper.node_sets["contact"], dtype=int)
     if rc.size != np_ or dc.size != np_:
         raise InputError(
-            "contact pairs", (rc.size, dc.size), f"{np_} rig and damper contact nodes",
+            "contact pairs",
+            (rc.size, dc.size),
+            f"{np_} rig and damper contact nodes",
             "the reduced models were built for another contact layout",
         )
     gap = max(
@@ -130,8 +132,12 @@ def assemble(
         np.abs(damper.node_coords[dc] - contact.points).max(),
     )
     if gap > 1e-7:
-        raise InputError("contact node coordinates", f"{gap:.3e} m", "<= 1e-7 m",
-                         "the reduced models do not match this contact set")
+        raise InputError(
+            "contact node coordinates",
+            f"{gap:.3e} m",
+            "<= 1e-7 m",
+            "the reduced models do not match this contact set",
+        )
     nr, nd = rig.n, damper.n
     n = nr + nd
     M = np.zeros((n, n))
@@ -154,8 +160,23 @@ def assemble(
     resp = np.zeros((2, n))
     resp[:, :nr] = _blade_rows(rig, "response", np.asarray(response_direction, float))
     return AssembledModel(
-        M=M, K=K, W=W, mu=np.full(np_, params.mu), kt=kt, kn=kn, n0=n0,
-        excitation_dofs=exc, response_dofs=resp, n_rig=nr, contact=contact,
-        info={"n_rig": nr, "n_damper": nd, "n_pairs": np_, "total_preload_n": float(n0.sum()),
-              "rig_kind": rig.kind, "damper_kind": damper.kind},
+        M=M,
+        K=K,
+        W=W,
+        mu=np.full(np_, params.mu),
+        kt=kt,
+        kn=kn,
+        n0=n0,
+        excitation_dofs=exc,
+        response_dofs=resp,
+        n_rig=nr,
+        contact=contact,
+        info={
+            "n_rig": nr,
+            "n_damper": nd,
+            "n_pairs": np_,
+            "total_preload_n": float(n0.sum()),
+            "rig_kind": rig.kind,
+            "damper_kind": damper.kind,
+        },
     )

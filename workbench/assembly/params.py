@@ -25,17 +25,29 @@ class ContactParams:
 
     mu: float = param(0.5, "friction coefficient", lo=0.0, hi=2.0)
     kt_line_n_per_m2: float = param(
-        5.0e8, "tangential stiffness per metre of contact line (cone, cylinder), N/m per m",
-        lo=0.0, lo_open=True)
+        5.0e8,
+        "tangential stiffness per metre of contact line (cone, cylinder), N/m per m",
+        lo=0.0,
+        lo_open=True,
+    )
     kn_line_n_per_m2: float = param(
-        5.0e8, "normal stiffness per metre of contact line (cone, cylinder), N/m per m",
-        lo=0.0, lo_open=True)
+        5.0e8,
+        "normal stiffness per metre of contact line (cone, cylinder), N/m per m",
+        lo=0.0,
+        lo_open=True,
+    )
     kt_face_n_per_m3: float = param(
-        5.0e10, "tangential stiffness per square metre of contact face (wedge), N/m per m^2",
-        lo=0.0, lo_open=True)
+        5.0e10,
+        "tangential stiffness per square metre of contact face (wedge), N/m per m^2",
+        lo=0.0,
+        lo_open=True,
+    )
     kn_face_n_per_m3: float = param(
-        5.0e10, "normal stiffness per square metre of contact face (wedge), N/m per m^2",
-        lo=0.0, lo_open=True)
+        5.0e10,
+        "normal stiffness per square metre of contact face (wedge), N/m per m^2",
+        lo=0.0,
+        lo_open=True,
+    )
     cf_n: float = param(300.0, "centrifugal force on the damper (radial, +z), N", lo=0.0)
 
     def pair_stiffness(self, kind: str, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -48,14 +60,13 @@ class ContactParams:
         raise ValueError(f"{kind=} is not 'line' or 'face'")
 
 
-def load_contact_params(path: str | Path | None = None, *,
-                        geometry_file: str | Path | None = None,
-                        **overrides: float) -> ContactParams:
+def load_contact_params(
+    path: str | Path | None = None, *, geometry_file: str | Path | None = None, **overrides: float
+) -> ContactParams:
     """Contact parameters, layered: geometry/contact.toml < the ``[contact]`` table of a
     rig file (``geometry_file``: a rig calibrated with its own contact) < ``path`` (a
     contact file) < ``overrides`` (None values ignored)."""
-    data: dict = dict(read_toml(DEFAULT_FILE).get("contact", {})) if DEFAULT_FILE.is_file() \
-        else {}
+    data: dict = dict(read_toml(DEFAULT_FILE).get("contact", {})) if DEFAULT_FILE.is_file() else {}
     for source in (geometry_file, path):
         if source is not None:
             data.update(read_toml(source).get("contact", {}))

@@ -148,16 +148,25 @@ class ScreenResult:
     def as_dict(self) -> dict:
         d = asdict(self)
         d["family"] = self.family
-        d["cap_over_slip"] = (self.f_cap_n / self.f_slip_n
-                              if math.isfinite(self.f_slip_n) and self.f_slip_n > 0 else None)
+        d["cap_over_slip"] = (
+            self.f_cap_n / self.f_slip_n
+            if math.isfinite(self.f_slip_n) and self.f_slip_n > 0
+            else None
+        )
         for k, v in list(d.items()):
             if isinstance(v, float) and not math.isfinite(v):
                 d[k] = None  # JSON has no inf: None reads "never" (see *_pair = -1)
         return d
 
 
-def _modal_response(lam: np.ndarray, phi: np.ndarray, vecs: np.ndarray, f1: np.ndarray,
-                    omegas: np.ndarray, zeta: float) -> np.ndarray:
+def _modal_response(
+    lam: np.ndarray,
+    phi: np.ndarray,
+    vecs: np.ndarray,
+    f1: np.ndarray,
+    omegas: np.ndarray,
+    zeta: float,
+) -> np.ndarray:
     """``vecs @ X(omega)`` for every omega, by modal superposition with ratio ``zeta``.
 
     ``phi`` mass-normalised; rigid modes (lam ~ 0) carry no static force and
@@ -172,8 +181,9 @@ def _modal_response(lam: np.ndarray, phi: np.ndarray, vecs: np.ndarray, f1: np.n
     return (modal_f[None, :] / den) @ proj.T
 
 
-def onset_forces(sys_: LinearPair, zeta: float, f_center_hz: float, law: str = "decoupled"
-                 ) -> tuple[float, int, float, int, float]:
+def onset_forces(
+    sys_: LinearPair, zeta: float, f_center_hz: float, law: str = "decoupled"
+) -> tuple[float, int, float, int, float]:
     """Slip and separation onset forces of the stuck linear response near ``f_center_hz``.
 
     The stuck response per newton gives, per pair, the tangential force
@@ -214,13 +224,24 @@ def onset_forces(sys_: LinearPair, zeta: float, f_center_hz: float, law: str = "
     i_slip = int(np.argmin(per_pair_slip))
     i_sep = int(np.argmin(per_pair_sep))
     fs, fp = float(per_pair_slip[i_slip]), float(per_pair_sep[i_sep])
-    return (fs, i_slip if math.isfinite(fs) else -1, fp, i_sep if math.isfinite(fp) else -1,
-            float(resp))
+    return (
+        fs,
+        i_slip if math.isfinite(fs) else -1,
+        fp,
+        i_sep if math.isfinite(fp) else -1,
+        float(resp),
+    )
 
 
-def screen(sys_: LinearPair, zeta: float, *, phase_deg: float = 0.0,
-           bound: LinearPair | None = None, law: str = "decoupled",
-           f_max_n: float | None = None) -> ScreenResult:
+def screen(
+    sys_: LinearPair,
+    zeta: float,
+    *,
+    phase_deg: float = 0.0,
+    bound: LinearPair | None = None,
+    law: str = "decoupled",
+    f_max_n: float | None = None,
+) -> ScreenResult:
     """The coupling screen of one system and excitation pattern (module docstring).
 
     ``zeta``: modal damping ratio of the stuck modes (> 0). ``bound``: the
@@ -236,10 +257,12 @@ def screen(sys_: LinearPair, zeta: float, *, phase_deg: float = 0.0,
     k2k = 1.0 - (fam_sl.freq_hz / fam_st.freq_hz) ** 2
     b_st = b_sl = b_k = None
     if bound is not None:
-        b_st = family_frequency(bound.M, bound.stiffness("stuck", STIFF_FACTOR), bound.f1,
-                                bound.r).freq_hz
-        b_sl = family_frequency(bound.M, bound.stiffness("sliding", STIFF_FACTOR), bound.f1,
-                                bound.r).freq_hz
+        b_st = family_frequency(
+            bound.M, bound.stiffness("stuck", STIFF_FACTOR), bound.f1, bound.r
+        ).freq_hz
+        b_sl = family_frequency(
+            bound.M, bound.stiffness("sliding", STIFF_FACTOR), bound.f1, bound.r
+        ).freq_hz
         b_k = 1.0 - (b_sl / b_st) ** 2
     fs, i_s, fp, i_p, resp = onset_forces(sys_, zeta, fam_st.freq_hz, law)
     # the sliding limit's peak (viscous damping only): where the response goes once the
@@ -247,15 +270,15 @@ def screen(sys_: LinearPair, zeta: float, *, phase_deg: float = 0.0,
     lam, phi = sla.eigh(sys_.stiffness("sliding"), sys_.M)
     w_sl = 2 * np.pi * fam_sl.freq_hz
     om = w_sl * (1 + 4 * max(zeta, 1e-4) * np.linspace(-1, 1, N_FREQ))
-    slide_peak = float(np.abs(_modal_response(lam, phi, sys_.r[None, :], sys_.f1, om,
-                                              zeta)).max())
+    slide_peak = float(np.abs(_modal_response(lam, phi, sys_.r[None, :], sys_.f1, om, zeta)).max())
     q = 1.0 / (2.0 * zeta)
     f_cap = (4.0 / math.pi) * q * max(k2k, 0.0) * fs
     growth = None
     verdict = ""
     if f_max_n is not None:
-        growth = (predicted_peak(resp, fs, f_cap, f_max_n)
-                  / predicted_peak(resp, fs, f_cap, REF_RATIO * f_max_n))
+        growth = predicted_peak(resp, fs, f_cap, f_max_n) / predicted_peak(
+            resp, fs, f_cap, REF_RATIO * f_max_n
+        )
         if not fs <= f_max_n:
             verdict = "stuck"
         elif growth <= LEVEL_GROWTH:
@@ -265,16 +288,38 @@ def screen(sys_: LinearPair, zeta: float, *, phase_deg: float = 0.0,
         if fp <= f_max_n:
             verdict += ", separates"  # the single-mode estimate ignores lift-off
     return ScreenResult(
-        phase_deg=float(phase_deg), f_stuck_hz=fam_st.freq_hz, f_slide_hz=fam_sl.freq_hz,
-        k2_over_k=float(k2k), bound_f_stuck_hz=b_st, bound_f_slide_hz=b_sl,
-        bound_k2_over_k=b_k, zeta=float(zeta), q_factor=q, stuck_peak_m_per_n=resp,
-        slide_peak_m_per_n=slide_peak, f_slip_n=fs, f_sep_n=fp, f_cap_n=float(f_cap),
-        slip_pair=i_s, sep_pair=i_p, f_max_n=f_max_n, growth=growth,
-        verdict=verdict)
+        phase_deg=float(phase_deg),
+        f_stuck_hz=fam_st.freq_hz,
+        f_slide_hz=fam_sl.freq_hz,
+        k2_over_k=float(k2k),
+        bound_f_stuck_hz=b_st,
+        bound_f_slide_hz=b_sl,
+        bound_k2_over_k=b_k,
+        zeta=float(zeta),
+        q_factor=q,
+        stuck_peak_m_per_n=resp,
+        slide_peak_m_per_n=slide_peak,
+        f_slip_n=fs,
+        f_sep_n=fp,
+        f_cap_n=float(f_cap),
+        slip_pair=i_s,
+        sep_pair=i_p,
+        f_max_n=f_max_n,
+        growth=growth,
+        verdict=verdict,
+    )
 
 
 def linear_pair(model, phase_deg: float, response_blade: int = 1) -> LinearPair:
     """A :class:`LinearPair` from an :class:`~workbench.assembly.model.AssembledModel`."""
-    return LinearPair(M=model.M, K=model.K, W=model.W, kt=model.kt, kn=model.kn, mu=model.mu,
-                      n0=model.n0, f1=model.excitation(phase_deg),
-                      r=model.response_dofs[response_blade - 1])
+    return LinearPair(
+        M=model.M,
+        K=model.K,
+        W=model.W,
+        kt=model.kt,
+        kn=model.kn,
+        mu=model.mu,
+        n0=model.n0,
+        f1=model.excitation(phase_deg),
+        r=model.response_dofs[response_blade - 1],
+    )

@@ -33,22 +33,50 @@ Example:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("damper and groove")
-    g.add_argument("--beta", type=num, default=45.0, metavar="DEG",
-                   help="platform angle between each contact plane and the radial direction, "
-                        "deg, 0 < beta < 90 (default 45)")
-    g.add_argument("--cone-angle", type=num, default=10.0, metavar="DEG",
-                   help="cone semi-angle alpha_c, deg, 0 <= alpha_c < beta; 0 is a cylinder "
-                        "(default 10)")
-    g.add_argument("--r1", type=num, default=10.0, metavar="MM",
-                   help="small-end radius R1, mm, > 0 (default 10)")
-    g.add_argument("--length", type=num, default=40.0, metavar="MM",
-                   help="damper length L along its axis, mm, > 0 (default 40); "
-                        "R2 = R1 + L tan(alpha_c)")
+    g.add_argument(
+        "--beta",
+        type=num,
+        default=45.0,
+        metavar="DEG",
+        help="platform angle between each contact plane and the radial direction, "
+        "deg, 0 < beta < 90 (default 45)",
+    )
+    g.add_argument(
+        "--cone-angle",
+        type=num,
+        default=10.0,
+        metavar="DEG",
+        help="cone semi-angle alpha_c, deg, 0 <= alpha_c < beta; 0 is a cylinder (default 10)",
+    )
+    g.add_argument(
+        "--r1",
+        type=num,
+        default=10.0,
+        metavar="MM",
+        help="small-end radius R1, mm, > 0 (default 10)",
+    )
+    g.add_argument(
+        "--length",
+        type=num,
+        default=40.0,
+        metavar="MM",
+        help="damper length L along its axis, mm, > 0 (default 40); R2 = R1 + L tan(alpha_c)",
+    )
     g = p.add_argument_group("charts (with --out)")
-    g.add_argument("--points", type=num, default=23, metavar="N",
-                   help="contact points per line for the 3-D slip table (default 23, as the paper)")
-    g.add_argument("--step", type=num, default=0.25, metavar="DEG",
-                   help="cone-angle step of the sweeps, deg, 0.01 .. 5 (default 0.25)")
+    g.add_argument(
+        "--points",
+        type=num,
+        default=23,
+        metavar="N",
+        help="contact points per line for the 3-D slip table (default 23, as the paper)",
+    )
+    g.add_argument(
+        "--step",
+        type=num,
+        default=0.25,
+        metavar="DEG",
+        help="cone-angle step of the sweeps, deg, 0.01 .. 5 (default 0.25)",
+    )
 
 
 def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
@@ -57,8 +85,9 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..errors import check_int, check_range
     from ..log import stage
 
-    design = ConeDesign(beta_deg=args.beta, cone_angle_deg=args.cone_angle,
-                        r1_mm=args.r1, length_mm=args.length)
+    design = ConeDesign(
+        beta_deg=args.beta, cone_angle_deg=args.cone_angle, r1_mm=args.r1, length_mm=args.length
+    )
     n_points = check_int("points", args.points, 3, 10_000)
     step = check_range("step", args.step, 0.01, 5.0, unit="deg")
     with stage(ctx.timings, "kinematics"):
@@ -68,8 +97,12 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     best_paper = best_cone_angle(cmp, "max_slip_ratio_paper")
     best_trans = best_cone_angle(cmp, "max_transverse_slip_ratio_3d")
     summary: dict[str, Any] = {
-        "inputs": {"beta_deg": design.beta_deg, "cone_angle_deg": design.cone_angle_deg,
-                   "r1_mm": design.r1_mm, "length_mm": design.length_mm},
+        "inputs": {
+            "beta_deg": design.beta_deg,
+            "cone_angle_deg": design.cone_angle_deg,
+            "r1_mm": design.r1_mm,
+            "length_mm": design.length_mm,
+        },
         "gamma_deg": pk.gamma_deg,
         "alpha1_deg": pk.alpha1_deg,
         "r2_mm": pk.r2_mm,
@@ -78,16 +111,17 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         "max_slip_ratio_3d": rk.max_slip_ratio,
         "max_transverse_slip_ratio_3d": rk.max_transverse_slip_ratio,
         "max_longitudinal_slip_ratio_3d": rk.max_longitudinal_slip_ratio,
-        "transverse_3d_over_paper": (rk.max_transverse_slip_ratio / pk.max_slip_ratio
-                                     if pk.max_slip_ratio > 0 else None),
+        "transverse_3d_over_paper": (
+            rk.max_transverse_slip_ratio / pk.max_slip_ratio if pk.max_slip_ratio > 0 else None
+        ),
         "best_cone_angle_deg": best_paper[0],
         "best_max_slip_ratio": best_paper[1],
         "best_cone_angle_3d_transverse_deg": best_trans[0],
         "best_max_transverse_slip_ratio_3d": best_trans[1],
         "notes": "slip ratios per unit relative radial platform displacement v; "
-                 "max_slip_ratio is paper eq. 6 (transverse); *_3d from the exact rigid-body "
-                 "solution with the middle section rolling; longitudinal slip shared equally by "
-                 "the two contact lines; best_* maximise over cone angles at this beta, R1, L",
+        "max_slip_ratio is paper eq. 6 (transverse); *_3d from the exact rigid-body "
+        "solution with the middle section rolling; longitudinal slip shared equally by "
+        "the two contact lines; best_* maximise over cone angles at this beta, R1, L",
     }
     if ctx.out is not None:
         from ..io import write_json

@@ -177,19 +177,28 @@ def _load(path: Path, over: dict, load_frf_model):
     except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as e:
         # h5py/numpy on a truncated or corrupt .h5/.npz
         name = (read_toml(path).get("model") or {}).get("matrices", "")
-        raise InputError("model.matrices", name, "a readable .npz or HDF5 file",
-                         f"{type(e).__name__}: {str(e)[:160]}") from None
+        raise InputError(
+            "model.matrices",
+            name,
+            "a readable .npz or HDF5 file",
+            f"{type(e).__name__}: {str(e)[:160]}",
+        ) from None
     K = model.system.K
     d = np.asarray(K.diagonal() if hasattr(K, "diagonal") else np.diag(K), dtype=float)
     if d.size and d.min() < 0:
         i = int(np.argmin(d))
-        raise InputError("model.stiffness", f"K[{i},{i}] = {d[i]:g}",
-                         "a stiffness matrix without negative stiffness (no negative diagonal "
-                         "entry)")
+        raise InputError(
+            "model.stiffness",
+            f"K[{i},{i}] = {d[i]:g}",
+            "a stiffness matrix without negative stiffness (no negative diagonal entry)",
+        )
     if 0 < d.size <= 2000:  # small models: positive semi-definite (round-off allowed)
         Kd = K.toarray() if hasattr(K, "toarray") else np.asarray(K, dtype=float)
         lam = np.linalg.eigvalsh(0.5 * (Kd + Kd.T))
         if lam[0] < -1e-9 * max(1.0, float(np.abs(lam).max())):
-            raise InputError("model.stiffness", f"lowest eigenvalue {lam[0]:.4g}",
-                             "a positive semi-definite stiffness matrix (no negative stiffness)")
+            raise InputError(
+                "model.stiffness",
+                f"lowest eigenvalue {lam[0]:.4g}",
+                "a positive semi-definite stiffness matrix (no negative stiffness)",
+            )
     return model

@@ -27,14 +27,26 @@ Example:
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from ..geometry.shapes import names
 
-    parser.add_argument("--damper", required=True, metavar="{" + ",".join(names()) + "}",
-                        help="damper shape")
-    parser.add_argument("--size", type=num, metavar="MM", default=None,
-                        help="global element size of the rig, mm (default: [rig.mesh] size_mm)")
-    parser.add_argument("--geometry", type=Path, metavar="FILE", default=None,
-                        help="TOML file overriding tables of the default geometry files")
-    parser.add_argument("--no-png", action="store_true",
-                        help="skip the picture (faster; the meshes are the same)")
+    parser.add_argument(
+        "--damper", required=True, metavar="{" + ",".join(names()) + "}", help="damper shape"
+    )
+    parser.add_argument(
+        "--size",
+        type=num,
+        metavar="MM",
+        default=None,
+        help="global element size of the rig, mm (default: [rig.mesh] size_mm)",
+    )
+    parser.add_argument(
+        "--geometry",
+        type=Path,
+        metavar="FILE",
+        default=None,
+        help="TOML file overriding tables of the default geometry files",
+    )
+    parser.add_argument(
+        "--no-png", action="store_true", help="skip the picture (faster; the meshes are the same)"
+    )
 
 
 def run(args: argparse.Namespace, ctx: Context) -> dict:
@@ -57,20 +69,36 @@ def run(args: argparse.Namespace, ctx: Context) -> dict:
             with stage(ctx.timings, "png"):
                 render_scene(geo, png)
     s = geo.stats
-    keys = ("n_nodes", "n_cells", "rig_n_nodes", "rig_n_cells", "damper_n_nodes",
-            "damper_n_cells", "n_contact_pairs", "max_pair_gap_m", "max_point_offset_m")
+    keys = (
+        "n_nodes",
+        "n_cells",
+        "rig_n_nodes",
+        "rig_n_cells",
+        "damper_n_nodes",
+        "damper_n_cells",
+        "n_contact_pairs",
+        "max_pair_gap_m",
+        "max_point_offset_m",
+    )
     summary = {"damper": geo.damper, **{k: s[k] for k in keys}}
     summary.update(
         damper_volume_m3=geo.damper_volume_m3,
         damper_volume_exact_m3=s["damper_volume_exact_m3"],
         damper_mass_kg=geo.damper_mass_kg,
         contact_kind=geo.contact.kind,
-        size_mm=s["size_mm"], contact_size_mm=s["contact_size_mm"],
+        size_mm=s["size_mm"],
+        contact_size_mm=s["contact_size_mm"],
         damper_size_mm=s["damper_size_mm"],
-        digest=geo.digest, reused=reused,
-        files={"rig_msh": str(geo.rig_msh), "damper_msh": str(geo.damper_msh),
-               "rig_xdmf": str(out / "rig.xdmf"), "damper_xdmf": str(out / "damper.xdmf"),
-               "record": str(h5), "png": str(png) if png else None},
+        digest=geo.digest,
+        reused=reused,
+        files={
+            "rig_msh": str(geo.rig_msh),
+            "damper_msh": str(geo.damper_msh),
+            "rig_xdmf": str(out / "rig.xdmf"),
+            "damper_xdmf": str(out / "damper.xdmf"),
+            "record": str(h5),
+            "png": str(png) if png else None,
+        },
         timings_s={k: round(v, 3) for k, v in ctx.timings.items()},
     )
     if "gamma_deg" in s:

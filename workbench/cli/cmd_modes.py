@@ -33,18 +33,39 @@ Examples:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--damper", required=True, metavar="{cone,cylinder,wedge}",
-                        help="damper shape")
-    parser.add_argument("--contact", default="stuck", metavar="{stuck,free}",
-                        help="contact pairs tied by springs (stuck, default) or absent (free)")
-    parser.add_argument("--n", type=num, default=10, metavar="N",
-                        help="number of modes (default 10)")
-    parser.add_argument("--size", type=num, metavar="MM", default=None,
-                        help="global element size of the rig, mm (default: [rig.mesh] size_mm)")
-    parser.add_argument("--geometry", type=Path, metavar="FILE", default=None,
-                        help="TOML file overriding tables of the default geometry files")
-    parser.add_argument("--contact-file", type=Path, metavar="FILE", default=None,
-                        help="contact parameters TOML (default geometry/contact.toml)")
+    parser.add_argument(
+        "--damper", required=True, metavar="{cone,cylinder,wedge}", help="damper shape"
+    )
+    parser.add_argument(
+        "--contact",
+        default="stuck",
+        metavar="{stuck,free}",
+        help="contact pairs tied by springs (stuck, default) or absent (free)",
+    )
+    parser.add_argument(
+        "--n", type=num, default=10, metavar="N", help="number of modes (default 10)"
+    )
+    parser.add_argument(
+        "--size",
+        type=num,
+        metavar="MM",
+        default=None,
+        help="global element size of the rig, mm (default: [rig.mesh] size_mm)",
+    )
+    parser.add_argument(
+        "--geometry",
+        type=Path,
+        metavar="FILE",
+        default=None,
+        help="TOML file overriding tables of the default geometry files",
+    )
+    parser.add_argument(
+        "--contact-file",
+        type=Path,
+        metavar="FILE",
+        default=None,
+        help="contact parameters TOML (default geometry/contact.toml)",
+    )
     parser.add_argument("--no-png", action="store_true", help="skip the mode-shape pictures")
 
 
@@ -60,12 +81,20 @@ def run(args: argparse.Namespace, ctx: Context) -> dict:
     params = load_contact_params(args.contact_file, geometry_file=args.geometry)
     out = ctx.out_dir(f"results/modes_{args.damper}")
     with stage(ctx.timings, "geometry"):
-        geom = build_geometry(args.damper, out / "geometry", geometry_file=args.geometry,
-                              size_mm=args.size)
+        geom = build_geometry(
+            args.damper, out / "geometry", geometry_file=args.geometry, size_mm=args.size
+        )
     from ..fe.modes import compute_modes
 
-    res = compute_modes(geom, contact=contact, n=n, contact_params=params, out_dir=out,
-                        shapes=not args.no_png, timings=ctx.timings)
+    res = compute_modes(
+        geom,
+        contact=contact,
+        n=n,
+        contact_params=params,
+        out_dir=out,
+        shapes=not args.no_png,
+        timings=ctx.timings,
+    )
     summary = res.summary()
     if not args.no_png and mpi_rank() == 0:
         from ..render.modes import render_modes

@@ -44,23 +44,43 @@ log = logging.getLogger(__name__)
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from ..studies.spec import add_arguments as add_study_options
 
-    p.add_argument("file", type=Path, metavar="FILE", help="model file (TOML with [model]) or "
-                   "study file")
+    p.add_argument(
+        "file", type=Path, metavar="FILE", help="model file (TOML with [model]) or study file"
+    )
     g = p.add_argument_group("nonlinear mode options")
-    g.add_argument("--mode", metavar="N", help="index of the stuck linear mode to follow "
-                   "(default: the one the excitation drives most in the band)")
-    g.add_argument("--range", metavar="R0,R1", default="0.05,300",
-                   help="modal amplitude range relative to the first slip or lift-off in the "
-                   "stuck mode [default: 0.05,300]")
-    g.add_argument("--amplitudes", metavar="A0,A1", help="absolute modal amplitude range "
-                   "(sqrt(kg) m) instead of --range")
-    g.add_argument("--steps", metavar="N", default="40",
-                   help="first step: the range over N steps [default: 40]")
-    g.add_argument("--levels", metavar="L1,L2,...", help="model file: excitation levels "
-                   "instead of the file's")
+    g.add_argument(
+        "--mode",
+        metavar="N",
+        help="index of the stuck linear mode to follow "
+        "(default: the one the excitation drives most in the band)",
+    )
+    g.add_argument(
+        "--range",
+        metavar="R0,R1",
+        default="0.05,300",
+        help="modal amplitude range relative to the first slip or lift-off in the "
+        "stuck mode [default: 0.05,300]",
+    )
+    g.add_argument(
+        "--amplitudes",
+        metavar="A0,A1",
+        help="absolute modal amplitude range (sqrt(kg) m) instead of --range",
+    )
+    g.add_argument(
+        "--steps",
+        metavar="N",
+        default="40",
+        help="first step: the range over N steps [default: 40]",
+    )
+    g.add_argument(
+        "--levels", metavar="L1,L2,...", help="model file: excitation levels instead of the file's"
+    )
     g.add_argument("--band", metavar="F0,F1", help="model file: band instead of [band]")
-    g.add_argument("--compare", action="store_true",
-                   help="model file: also compute the full HBM curve of every level")
+    g.add_argument(
+        "--compare",
+        action="store_true",
+        help="model file: also compute the full HBM curve of every level",
+    )
     add_study_options(p)
 
 
@@ -127,19 +147,37 @@ def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     rel = _pair(args.range, "--range")
     steps = _list(args.steps, "--steps", int)[0]
     nm = nonlinear_mode(
-        model.system, mode=mode, amplitude_range=amps, relative_range=rel,
-        harmonics=model.harmonics, nt=model.nt or None, outputs=model.outputs,
-        output_names=model.output_names, f1=model.f1, band_hz=model.band_hz, n_steps=steps,
-        dc_anchor=model.options.dc_anchor, levels=model.levels, label=model.name)
-    files = {"h5": str(nm.save(out / "backbone.h5")),
-             "csv": str(nm.to_csv(out / "backbone.csv", unit=model.length_unit))}
+        model.system,
+        mode=mode,
+        amplitude_range=amps,
+        relative_range=rel,
+        harmonics=model.harmonics,
+        nt=model.nt or None,
+        outputs=model.outputs,
+        output_names=model.output_names,
+        f1=model.f1,
+        band_hz=model.band_hz,
+        n_steps=steps,
+        dc_anchor=model.options.dc_anchor,
+        levels=model.levels,
+        label=model.name,
+    )
+    files = {
+        "h5": str(nm.save(out / "backbone.h5")),
+        "csv": str(nm.to_csv(out / "backbone.csv", unit=model.length_unit)),
+    }
     mm = model.length_unit == "m"
     scale, unit = (1e3, "mm") if mm else (1.0, model.length_unit)
     if nm.n_points:
-        files["backbone_png"] = str(plot_backbones([(model.name, nm)], out / "backbone.png",
-                                                   unit_scale=scale, unit=unit,
-                                                   title=f"{model.name}: nonlinear mode "
-                                                   f"{nm.mode}"))
+        files["backbone_png"] = str(
+            plot_backbones(
+                [(model.name, nm)],
+                out / "backbone.png",
+                unit_scale=scale,
+                unit=unit,
+                title=f"{model.name}: nonlinear mode {nm.mode}",
+            )
+        )
     levels, syns, hbm = [], [], []
     t_hbm = 0.0
     for level in model.levels:
@@ -149,42 +187,73 @@ def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         row: dict[str, Any] = {"level": level, "synthesis_s": round(t_syn, 6)}
         if s is not None:
             syns.append(s)
-            row.update(peak_frequency_hz=s.peak_freq_hz, peak_amplitude=s.peak_amplitude,
-                       valid=s.valid, reasons=s.reasons)
+            row.update(
+                peak_frequency_hz=s.peak_freq_hz,
+                peak_amplitude=s.peak_amplitude,
+                valid=s.valid,
+                reasons=s.reasons,
+            )
         if args.compare:
-            b = frequency_response(model.system, model.f1, level, model.band_hz, model.outputs,
-                                   harmonics=model.harmonics, nt=model.nt or None,
-                                   options=model.options.replace(stability=False),
-                                   output_names=model.output_names,
-                                   label=f"{model.name} level {level:g}")
+            b = frequency_response(
+                model.system,
+                model.f1,
+                level,
+                model.band_hz,
+                model.outputs,
+                harmonics=model.harmonics,
+                nt=model.nt or None,
+                options=model.options.replace(stability=False),
+                output_names=model.output_names,
+                label=f"{model.name} level {level:g}",
+            )
             hbm.append(b)
             t_hbm += b.timings.get("total", 0.0)
             i = b.peak(0)
-            row.update(hbm_peak_frequency_hz=float(b.freq_hz[i]) if i >= 0 else None,
-                       hbm_peak_amplitude=float(b.out_amp[i, 0]) if i >= 0 else None,
-                       hbm_s=round(b.timings.get("total", 0.0), 4))
+            row.update(
+                hbm_peak_frequency_hz=float(b.freq_hz[i]) if i >= 0 else None,
+                hbm_peak_amplitude=float(b.out_amp[i, 0]) if i >= 0 else None,
+                hbm_s=round(b.timings.get("total", 0.0), 4),
+            )
             if s is not None and i >= 0:
                 row["error_pct"] = 100 * (s.peak_amplitude / float(b.out_amp[i, 0]) - 1)
                 row["freq_error_pct"] = 100 * (s.peak_freq_hz / float(b.freq_hz[i]) - 1)
         levels.append(row)
     if syns:
-        files["synthesis_png"] = str(plot_synthesis(
-            nm, syns, out / "synthesis.png", hbm=hbm or None, unit_scale=scale, unit=unit,
-            band_hz=model.band_hz, title=f"{model.name}: forced responses from the mode"))
+        files["synthesis_png"] = str(
+            plot_synthesis(
+                nm,
+                syns,
+                out / "synthesis.png",
+                hbm=hbm or None,
+                unit_scale=scale,
+                unit=unit,
+                band_hz=model.band_hz,
+                title=f"{model.name}: forced responses from the mode",
+            )
+        )
     t_nm = float(nm.timings.get("total", 0.0))
     summary = {
-        "model": str(model.path), "name": model.name, "n_dofs": model.system.n,
-        "n_elements": model.system.n_el, "length_unit": model.length_unit,
-        "harmonics": list(model.harmonics), "nt": nm.nt, "band_hz": list(model.band_hz),
-        "backbone": nm.summary(), "levels": levels, "files": files, "out": str(out),
+        "model": str(model.path),
+        "name": model.name,
+        "n_dofs": model.system.n,
+        "n_elements": model.system.n_el,
+        "length_unit": model.length_unit,
+        "harmonics": list(model.harmonics),
+        "nt": nm.nt,
+        "band_hz": list(model.band_hz),
+        "backbone": nm.summary(),
+        "levels": levels,
+        "files": files,
+        "out": str(out),
     }
     if args.compare:
         summary["hbm_s"] = round(t_hbm, 4)
         summary["time_ratio"] = round(t_nm / t_hbm, 4) if t_hbm > 0 else None
     write_json(out / "summary.json", summary)
     if nm.failed:
-        raise SolveError(f"the backbone stopped early ({nm.message}); what was computed is in "
-                         f"{out}")
+        raise SolveError(
+            f"the backbone stopped early ({nm.message}); what was computed is in {out}"
+        )
     return summary
 
 
@@ -210,6 +279,11 @@ def _run_study(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         write_rows_csv(out / "nlmodes.csv", res["rows"])
     sections = nlmode_sections(res, out)
     figs = [f["path"] for s in sections for f in s["figures"]]
-    return {"study": spec.name, "out": str(out), "backbones": res["backbones"],
-            "cost": cost_rows(res), "figures": figs,
-            **({"rows": res["rows"]} if ctx.json else {})}
+    return {
+        "study": spec.name,
+        "out": str(out),
+        "backbones": res["backbones"],
+        "cost": cost_rows(res),
+        "figures": figs,
+        **({"rows": res["rows"]} if ctx.json else {}),
+    }

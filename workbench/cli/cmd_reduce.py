@@ -28,19 +28,42 @@ Example:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--damper", required=True, metavar="{cone,cylinder,wedge}",
-                        help="damper shape")
-    parser.add_argument("--modes", type=num, default=12, metavar="M",
-                        help="fixed-interface modes per body (default 12, as in the paper)")
-    parser.add_argument("--rigid-damper", action="store_true",
-                        help="a rigid 6-DOF damper instead of its Craig-Bampton model")
-    parser.add_argument("--size", type=num, metavar="MM", default=None,
-                        help="global element size of the rig, mm (default: [rig.mesh] size_mm)")
-    parser.add_argument("--geometry", type=Path, metavar="FILE", default=None,
-                        help="TOML file overriding tables of the default geometry files")
-    parser.add_argument("--contact-file", type=Path, metavar="FILE", default=None,
-                        help="contact parameters of the stuck check "
-                        "(default geometry/contact.toml)")
+    parser.add_argument(
+        "--damper", required=True, metavar="{cone,cylinder,wedge}", help="damper shape"
+    )
+    parser.add_argument(
+        "--modes",
+        type=num,
+        default=12,
+        metavar="M",
+        help="fixed-interface modes per body (default 12, as in the paper)",
+    )
+    parser.add_argument(
+        "--rigid-damper",
+        action="store_true",
+        help="a rigid 6-DOF damper instead of its Craig-Bampton model",
+    )
+    parser.add_argument(
+        "--size",
+        type=num,
+        metavar="MM",
+        default=None,
+        help="global element size of the rig, mm (default: [rig.mesh] size_mm)",
+    )
+    parser.add_argument(
+        "--geometry",
+        type=Path,
+        metavar="FILE",
+        default=None,
+        help="TOML file overriding tables of the default geometry files",
+    )
+    parser.add_argument(
+        "--contact-file",
+        type=Path,
+        metavar="FILE",
+        default=None,
+        help="contact parameters of the stuck check (default geometry/contact.toml)",
+    )
     parser.add_argument("--force", action="store_true", help="rebuild even if cached")
 
 
@@ -58,8 +81,9 @@ def run(args: argparse.Namespace, ctx: Context) -> dict:
     params = load_contact_params(args.contact_file, geometry_file=args.geometry)
     out = ctx.out_dir(f"results/reduced_{args.damper}")
     with stage(ctx.timings, "geometry"):
-        geom = build_geometry(args.damper, out / "geometry", geometry_file=args.geometry,
-                              size_mm=args.size)
+        geom = build_geometry(
+            args.damper, out / "geometry", geometry_file=args.geometry, size_mm=args.size
+        )
     from ..fe.coupling import stuck_reduced_system
     from ..fe.modes import classify_bending
     from ..fe.reduce import cached_model, reduce_body, save_model
@@ -70,25 +94,36 @@ def run(args: argparse.Namespace, ctx: Context) -> dict:
         cached = cached_model(geom, name, n_modes=n_modes, rigid=rigid, cache_dir=out / "cache")
         t: dict[str, float] = {}
         with stage(ctx.timings, f"reduce {name}"):
-            rm = reduce_body(geom, name, n_modes=n_modes, rigid=rigid, cache_dir=out / "cache",
-                             force=args.force, timings=t)
+            rm = reduce_body(
+                geom,
+                name,
+                n_modes=n_modes,
+                rigid=rigid,
+                cache_dir=out / "cache",
+                force=args.force,
+                timings=t,
+            )
         path = out / f"{name}.h5"
         if mpi_rank() == 0:
             save_model(rm, path, geom.contact)
         bodies[name] = rm
         summary["bodies"][name] = {
-            "kind": rm.kind, "n_reduced": rm.n, "n_full_dofs": rm.n_full_dofs,
+            "kind": rm.kind,
+            "n_reduced": rm.n,
+            "n_full_dofs": rm.n_full_dofs,
             "n_interface_nodes": rm.n_nodes,
             "fixed_interface_modes_hz": [round(float(f), 1) for f in rm.mode_freqs_hz],
             "reused": bool(cached is not None and not args.force),
-            "digest": rm.digest, "file": str(path), "timings_s": rm.timings,
+            "digest": rm.digest,
+            "file": str(path),
+            "timings_s": rm.timings,
         }
     with stage(ctx.timings, "stuck check"):
         rig, dmp = bodies["rig"], bodies["damper"]
         K, M = stuck_reduced_system(rig, dmp, geom.contact, params)
         k = min(10, K.shape[0])
         lam, V = sl.eigh(K, M, subset_by_index=[0, k - 1])
-        resp = (rig.T[rig.node_dofs(rig.node_sets["response"])] @ V[:rig.n]).T.reshape(-1, 2, 3)
+        resp = (rig.T[rig.node_dofs(rig.node_sets["response"])] @ V[: rig.n]).T.reshape(-1, 2, 3)
         labels, i_in, i_out = classify_bending(resp)
         freqs = np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi)
     summary["stuck_reduced"] = {

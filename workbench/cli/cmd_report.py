@@ -32,27 +32,51 @@ def check_manifest(path: Path) -> dict:
     import json
 
     if not path.is_file():
-        raise InputError("DIR", str(path.parent), "a study folder containing manifest.json "
-                         "(written by upd study)")
+        raise InputError(
+            "DIR",
+            str(path.parent),
+            "a study folder containing manifest.json (written by upd study)",
+        )
     try:
         m = json.loads(path.read_bytes().decode("utf-8"))
     except UnicodeDecodeError as e:
-        raise InputError("manifest", str(path), "a UTF-8 JSON file written by upd study",
-                         f"byte {e.start} is not UTF-8; run upd study again") from None
+        raise InputError(
+            "manifest",
+            str(path),
+            "a UTF-8 JSON file written by upd study",
+            f"byte {e.start} is not UTF-8; run upd study again",
+        ) from None
     except ValueError as e:
-        raise InputError("manifest", str(path), "a JSON file written by upd study",
-                         f"{e}; run upd study again to rewrite it") from None
+        raise InputError(
+            "manifest",
+            str(path),
+            "a JSON file written by upd study",
+            f"{e}; run upd study again to rewrite it",
+        ) from None
     except OSError as e:
         raise InputError("manifest", str(path), "a readable file", e.strerror or "") from None
-    shapes = {"sections": list, "summary": list, "timings": dict, "inputs": dict,
-              "versions": dict, "sources": dict}
+    shapes = {
+        "sections": list,
+        "summary": list,
+        "timings": dict,
+        "inputs": dict,
+        "versions": dict,
+        "sources": dict,
+    }
     if not isinstance(m, dict):
-        raise InputError("manifest", str(path), "a JSON object written by upd study",
-                         f"it holds a {type(m).__name__}")
+        raise InputError(
+            "manifest",
+            str(path),
+            "a JSON object written by upd study",
+            f"it holds a {type(m).__name__}",
+        )
     for key, typ in shapes.items():
         if key in m and not isinstance(m[key], typ):
-            raise InputError(f"manifest {key}", m[key] if len(str(m[key])) < 40 else "...",
-                             f"a JSON {'array' if typ is list else 'object'} (in {path})")
+            raise InputError(
+                f"manifest {key}",
+                m[key] if len(str(m[key])) < 40 else "...",
+                f"a JSON {'array' if typ is list else 'object'} (in {path})",
+            )
     for i, sec in enumerate(m.get("sections", [])):
         if not isinstance(sec, dict):
             raise InputError(f"manifest sections[{i}]", sec, f"a JSON object (in {path})")

@@ -42,8 +42,13 @@ examples:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from ..studies.spec import add_arguments as add_study_options
 
-    p.add_argument("file", nargs="?", type=Path, metavar="FILE",
-                   help="study file (TOML); without it the built-in defaults are used")
+    p.add_argument(
+        "file",
+        nargs="?",
+        type=Path,
+        metavar="FILE",
+        help="study file (TOML); without it the built-in defaults are used",
+    )
     add_study_options(p)
 
 
@@ -74,10 +79,14 @@ def run(args: argparse.Namespace, ctx) -> dict:
             line = "  ".join(h.ljust(w) for h, w in zip(head, widths, strict=True))
             sys.stdout.write(line + "\n" + "-" * len(line) + "\n")
             for r in body:
-                sys.stdout.write("  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True))
-                                 + "\n")
-    return {"study": spec.name, "out": str(out), "files": [str(out / "screen.json"),
-                                                           str(out / "screen.csv")],
-            "largest_force_n": res["f_max_n"],
-            "seconds_per_model": {k: round(v, 2) for k, v in res["timings"].items()},
-            **({"rows": rows} if ctx.json else {})}
+                sys.stdout.write(
+                    "  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) + "\n"
+                )
+    return {
+        "study": spec.name,
+        "out": str(out),
+        "files": [str(out / "screen.json"), str(out / "screen.csv")],
+        "largest_force_n": res["f_max_n"],
+        "seconds_per_model": {k: round(v, 2) for k, v in res["timings"].items()},
+        **({"rows": rows} if ctx.json else {}),
+    }

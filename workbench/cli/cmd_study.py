@@ -28,8 +28,13 @@ examples:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from ..studies.spec import add_arguments as add_study_options
 
-    p.add_argument("file", nargs="?", type=Path, metavar="FILE",
-                   help="study file (TOML); without it the built-in defaults are used")
+    p.add_argument(
+        "file",
+        nargs="?",
+        type=Path,
+        metavar="FILE",
+        help="study file (TOML); without it the built-in defaults are used",
+    )
     p.add_argument("--force", action="store_true", help="recompute every case, ignore caches")
     add_study_options(p)
 
@@ -61,8 +66,11 @@ def _run(spec, out: Path, args: argparse.Namespace) -> dict:
         return run_uncertainty(spec, out, force=args.force)
     results = run_study(spec, out, force=args.force)
     summary = {
-        "study": spec.name, "kind": spec.kind, "out": str(out),
-        "report": str(out / "report.html"), "n_cases": len(results.cases),
+        "study": spec.name,
+        "kind": spec.kind,
+        "out": str(out),
+        "report": str(out / "report.html"),
+        "n_cases": len(results.cases),
         "n_computed": results.extras.get("n_computed"),
         "n_reused": results.extras.get("n_reused"),
         "peak_not_reached": [c.case_id for c in results.uncovered()],

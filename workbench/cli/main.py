@@ -65,8 +65,9 @@ class Context:
         try:
             p.mkdir(parents=True, exist_ok=True)
         except OSError as e:
-            raise InputError(what, str(p), "a folder that can be created",
-                             e.strerror or type(e).__name__) from None
+            raise InputError(
+                what, str(p), "a folder that can be created", e.strerror or type(e).__name__
+            ) from None
         self.created += new
         if not os.access(p, os.W_OK | os.X_OK):
             raise InputError(what, str(p), "a folder you can write to", "permission denied")
@@ -101,15 +102,30 @@ def _common(suppress: bool) -> argparse.ArgumentParser:
     d = (lambda v: argparse.SUPPRESS) if suppress else (lambda v: v)
     p = argparse.ArgumentParser(add_help=False)
     g = p.add_argument_group("common options")
-    g.add_argument("--json", action="store_true", default=d(False),
-                   help="print a machine-readable summary on stdout (logs go to stderr)")
-    g.add_argument("--out", type=Path, metavar="DIR", default=d(None),
-                   help="folder for the files this command writes")
+    g.add_argument(
+        "--json",
+        action="store_true",
+        default=d(False),
+        help="print a machine-readable summary on stdout (logs go to stderr)",
+    )
+    g.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        default=d(None),
+        help="folder for the files this command writes",
+    )
     g.add_argument("-v", "--verbose", action="count", default=d(0), help="more log messages")
-    g.add_argument("-q", "--quiet", action="count", default=d(0),
-                   help="only warnings and errors; no progress bars")
-    g.add_argument("--debug", action="store_true", default=d(False),
-                   help="show the traceback of an error")
+    g.add_argument(
+        "-q",
+        "--quiet",
+        action="count",
+        default=d(0),
+        help="only warnings and errors; no progress bars",
+    )
+    g.add_argument(
+        "--debug", action="store_true", default=d(False), help="show the traceback of an error"
+    )
     return p
 
 
@@ -132,8 +148,11 @@ def build_parser() -> argparse.ArgumentParser:
                 continue  # not built yet
             raise
         p = sub.add_parser(
-            name, help=mod.HELP, description=getattr(mod, "DESCRIPTION", mod.HELP),
-            parents=[_common(True)], formatter_class=argparse.RawDescriptionHelpFormatter,
+            name,
+            help=mod.HELP,
+            description=getattr(mod, "DESCRIPTION", mod.HELP),
+            parents=[_common(True)],
+            formatter_class=argparse.RawDescriptionHelpFormatter,
         )
         mod.add_arguments(p)
         p.set_defaults(_run=mod.run)

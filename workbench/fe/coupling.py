@@ -36,8 +36,9 @@ def pair_springs(contact: ContactSet, params: ContactParams) -> np.ndarray:
     return np.einsum("nki,nk,nkj->nij", R, d, R)
 
 
-def stuck_reduced_system(rig: ReducedModel, damper: ReducedModel, contact: ContactSet,
-                         params: ContactParams) -> tuple[np.ndarray, np.ndarray]:
+def stuck_reduced_system(
+    rig: ReducedModel, damper: ReducedModel, contact: ContactSet, params: ContactParams
+) -> tuple[np.ndarray, np.ndarray]:
     """K, M of rig + damper (q = [q_rig; q_damper]) with every contact pair stuck."""
     S = pair_springs(contact, params)
     n_p = contact.n_pairs
@@ -49,7 +50,7 @@ def stuck_reduced_system(rig: ReducedModel, damper: ReducedModel, contact: Conta
     Gd = damper.T[damper.node_dofs(dc)]  # (3 n_p, n_d): damper displacements
     Sb = np.zeros((3 * n_p, 3 * n_p))
     for i in range(n_p):
-        Sb[3 * i:3 * i + 3, 3 * i:3 * i + 3] = S[i]
+        Sb[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = S[i]
     G = np.hstack([-Gp, Gd])
     nr, nd = rig.n, damper.n
     K = np.zeros((nr + nd, nr + nd))
@@ -76,8 +77,9 @@ def stuck_fe_system(rig, damper, p_nodes, d_nodes, S: np.ndarray):
     add = PETSc.InsertMode.ADD_VALUES
     Krr = rig.K.copy()
     Kdd = damper.K.copy()
-    Krd = PETSc.Mat().createAIJ(((rig.n_local, rig.n_dofs), (damper.n_local, damper.n_dofs)),
-                                nnz=(3, 3), comm=comm)
+    Krd = PETSc.Mat().createAIJ(
+        ((rig.n_local, rig.n_dofs), (damper.n_local, damper.n_dofs)), nnz=(3, 3), comm=comm
+    )
     Krd.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
     Krd.setUp()
     for i in range(len(S)):

@@ -77,8 +77,7 @@ def _dense(comm, local: np.ndarray, n_global_rows: int):
 
     arr = np.asfortranarray(local, dtype=PETSc.ScalarType)
     ncols = arr.shape[1]
-    D = PETSc.Mat().createDense(((arr.shape[0], n_global_rows), (PETSc.DECIDE, ncols)),
-                                comm=comm)
+    D = PETSc.Mat().createDense(((arr.shape[0], n_global_rows), (PETSc.DECIDE, ncols)), comm=comm)
     D.setUp()
     D.getDenseArray()[:] = arr
     D.assemble()
@@ -129,8 +128,14 @@ def craig_bampton(
     Phi = np.zeros((len(interior), 0))
     with stage(timings, "eigen"):
         if n_modes > 0:
-            sol = eigen_solve(K_ii, M_ii, n_modes, sigma=0.0, prefix="upd_cb_",
-                              what=f"{body.name} fixed-interface modes")
+            sol = eigen_solve(
+                K_ii,
+                M_ii,
+                n_modes,
+                sigma=0.0,
+                prefix="upd_cb_",
+                what=f"{body.name} fixed-interface modes",
+            )
             lam = sol.eigenvalues
             cols = []
             for v in sol.vectors:
@@ -151,13 +156,17 @@ def craig_bampton(
             F = ksp.getPC().getFactorMatrix()
             keep = ksp
     if n_modes and np.any(lam <= 0):
-        raise SolveError(f"{body.name}: fixed-interface problem is singular "
-                         f"(eigenvalue {lam.min():.3e}); the interface does not hold the body")
+        raise SolveError(
+            f"{body.name}: fixed-interface problem is singular "
+            f"(eigenvalue {lam.min():.3e}); the interface does not hold the body"
+        )
 
     # static constraint modes, a block of right-hand sides at a time
     Psi = np.empty((len(interior), nb))
-    with stage(timings, "constraint_modes"), progress_bar(
-            f"{body.name} constraint modes", total=nb, unit="rhs") as bar:
+    with (
+        stage(timings, "constraint_modes"),
+        progress_bar(f"{body.name} constraint modes", total=nb, unit="rhs") as bar,
+    ):
         for c0 in range(0, nb, RHS_BLOCK):
             c1 = min(nb, c0 + RHS_BLOCK)
             B = _dense(comm, -Kib[:, c0:c1].toarray(), n_i)
@@ -230,6 +239,13 @@ def craig_bampton(
     for A in (K_ii, M_ii):
         A.destroy()
     comm.Barrier()
-    info(log, comm, "%s: Craig-Bampton %d interface DOFs + %d modes (%s Hz)", body.name, nb, m,
-         ", ".join(f"{f:.0f}" for f in freqs[:4]) + (" ..." if m > 4 else ""))
+    info(
+        log,
+        comm,
+        "%s: Craig-Bampton %d interface DOFs + %d modes (%s Hz)",
+        body.name,
+        nb,
+        m,
+        ", ".join(f"{f:.0f}" for f in freqs[:4]) + (" ..." if m > 4 else ""),
+    )
     return CBMatrices(K=Kr, M=Mr, mode_freqs_hz=freqs, n_b=nb)

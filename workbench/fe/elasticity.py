@@ -46,8 +46,9 @@ class Material:
         return cls(
             E_pa=check_range("material.E_pa", d.get("E_pa"), 0.0, lo_open=True, unit="Pa"),
             nu=check_range("material.nu", d.get("nu"), -1.0, 0.5, lo_open=True, hi_open=True),
-            rho_kg_m3=check_range("material.rho_kg_m3", d.get("rho_kg_m3"), 0.0, lo_open=True,
-                                  unit="kg/m^3"),
+            rho_kg_m3=check_range(
+                "material.rho_kg_m3", d.get("rho_kg_m3"), 0.0, lo_open=True, unit="kg/m^3"
+            ),
         )
 
     @property
@@ -136,22 +137,39 @@ def assemble_body(
             facets = femesh.facets(clamped)
             mesh.topology.create_connectivity(2, 3)
             blocks = fem.locate_dofs_topological(V, 2, facets)
-            n_clamped = femesh.comm.allreduce(
-                int(np.sum(blocks < V.dofmap.index_map.size_local)))
+            n_clamped = femesh.comm.allreduce(int(np.sum(blocks < V.dofmap.index_map.size_local)))
             if n_clamped == 0:
                 from ..errors import InputError
 
-                raise InputError(f"{name} clamped group", clamped, "a surface with mesh nodes",
-                                 "no node found on it")
+                raise InputError(
+                    f"{name} clamped group",
+                    clamped,
+                    "a surface with mesh nodes",
+                    "no node found on it",
+                )
             bcs = [fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), blocks, V)]
         K = fem.petsc.assemble_matrix(a, bcs=bcs, diagonal=1.0)
         K.assemble()
         M = fem.petsc.assemble_matrix(m, bcs=bcs, diagonal=0.0)
         M.assemble()
-    body = ElasticBody(name=name, femesh=femesh, V=V, K=K, M=M, material=material,
-                       clamped_blocks=np.asarray(blocks))
+    body = ElasticBody(
+        name=name,
+        femesh=femesh,
+        V=V,
+        K=K,
+        M=M,
+        material=material,
+        clamped_blocks=np.asarray(blocks),
+    )
     if timings is not None:
         timings["assembly"] = timings.get("assembly", 0.0) + local["assembly"]
-    info(log, femesh.comm, "%s: %d DOFs (P%d), assembled in %.1f s", name, body.n_dofs, degree,
-             local["assembly"])
+    info(
+        log,
+        femesh.comm,
+        "%s: %d DOFs (P%d), assembled in %.1f s",
+        name,
+        body.n_dofs,
+        degree,
+        local["assembly"],
+    )
     return body

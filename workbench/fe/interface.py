@@ -40,8 +40,13 @@ class InterfaceNodes:
         return self.global_dofs.reshape(-1)
 
 
-def locate_nodes(body: ElasticBody, points: np.ndarray, *, what: str = "interface point",
-                 labels: list[str] | None = None) -> InterfaceNodes:
+def locate_nodes(
+    body: ElasticBody,
+    points: np.ndarray,
+    *,
+    what: str = "interface point",
+    labels: list[str] | None = None,
+) -> InterfaceNodes:
     """Locate the nodes of ``body`` at ``points``; InputError if a point is not a node."""
     from scipy.spatial import cKDTree
 
@@ -60,8 +65,11 @@ def locate_nodes(body: ElasticBody, points: np.ndarray, *, what: str = "interfac
     # the closest node over all ranks; ties go to the lowest rank
     pairs = np.stack([dist, np.full(n, comm.rank, dtype=float)], axis=1)
     all_pairs = comm.allgather(pairs)
-    best = np.array([min((p[i, 0], p[i, 1]) for p in all_pairs) for i in range(n)]) \
-        if n else np.zeros((0, 2))
+    best = (
+        np.array([min((p[i, 0], p[i, 1]) for p in all_pairs) for i in range(n)])
+        if n
+        else np.zeros((0, 2))
+    )
     dmin = best[:, 0] if n else np.zeros(0)
     owner = best[:, 1].astype(int) if n else np.zeros(0, dtype=int)
     bad = np.flatnonzero(dmin > tol)
@@ -69,7 +77,8 @@ def locate_nodes(body: ElasticBody, points: np.ndarray, *, what: str = "interfac
         i = int(bad[0])
         name = labels[i] if labels else f"{what} {i}"
         raise InputError(
-            f"{body.name} {name}", [round(float(c), 9) for c in pts[i]],
+            f"{body.name} {name}",
+            [round(float(c), 9) for c in pts[i]],
             f"a node of the {body.name} mesh (within {tol:.1e} m)",
             f"the nearest node is {dmin[i]:.3e} m away; {len(bad)} of {n} points are not "
             "mesh nodes: the geometry stage must embed them",
@@ -85,11 +94,15 @@ def locate_nodes(body: ElasticBody, points: np.ndarray, *, what: str = "interfac
         j = int(np.flatnonzero(counts > 1)[0])
         i = int(first[j])
         name = labels[i] if labels else f"{what} {i}"
-        raise InputError(f"{body.name} {name}", [round(float(c), 9) for c in pts[i]],
-                         "a point that no other interface point shares a node with",
-                         "two interface points fall on the same mesh node")
-    return InterfaceNodes(points=pts, owner=owner, global_dofs=global_dofs,
-                          local_block=local_block, distance=dmin)
+        raise InputError(
+            f"{body.name} {name}",
+            [round(float(c), 9) for c in pts[i]],
+            "a point that no other interface point shares a node with",
+            "two interface points fall on the same mesh node",
+        )
+    return InterfaceNodes(
+        points=pts, owner=owner, global_dofs=global_dofs, local_block=local_block, distance=dmin
+    )
 
 
 def interface_points(geom, body: str) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
@@ -103,8 +116,10 @@ def interface_points(geom, body: str) -> tuple[np.ndarray, dict[str, np.ndarray]
     """
     groups = [("contact", np.asarray(geom.contact.points, dtype=float))]
     if body == "rig":
-        groups += [("excitation", np.asarray(geom.excitation_points, dtype=float)),
-                   ("response", np.asarray(geom.response_points, dtype=float))]
+        groups += [
+            ("excitation", np.asarray(geom.excitation_points, dtype=float)),
+            ("response", np.asarray(geom.response_points, dtype=float)),
+        ]
     elif body != "damper":
         raise InputError("body", body, "one of rig, damper")
     coords: list[np.ndarray] = []

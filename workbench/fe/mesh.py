@@ -38,8 +38,10 @@ class FEMesh:
         if name not in self.groups or self.groups[name][0] != dim:
             have = sorted(n for n, (d, _) in self.groups.items() if d == dim)
             raise InputError(
-                f"physical group of {self.path.name}", name,
-                f"one of the {dim}-D groups {have}", "the mesh file does not define it",
+                f"physical group of {self.path.name}",
+                name,
+                f"one of the {dim}-D groups {have}",
+                "the mesh file does not define it",
             )
         return self.groups[name][1]
 
@@ -73,7 +75,17 @@ def read_msh(path: str | Path, comm=None) -> FEMesh:
     if not any(dim == 3 for dim, _ in d.groups.values()):
         raise InputError("mesh file", str(path), "a mesh with a physical volume group")
     n_cells = comm.allreduce(d.mesh.topology.index_map(3).size_local)
-    log.debug("read %s: %d cells, order %d, groups %s", path.name, n_cells,
-              d.mesh.geometry.cmap.degree, sorted(d.groups))
-    return FEMesh(mesh=d.mesh, cell_tags=d.cell_tags, facet_tags=d.facet_tags,
-                  groups=dict(d.groups), path=path)
+    log.debug(
+        "read %s: %d cells, order %d, groups %s",
+        path.name,
+        n_cells,
+        d.mesh.geometry.cmap.degree,
+        sorted(d.groups),
+    )
+    return FEMesh(
+        mesh=d.mesh,
+        cell_tags=d.cell_tags,
+        facet_tags=d.facet_tags,
+        groups=dict(d.groups),
+        path=path,
+    )

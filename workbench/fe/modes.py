@@ -69,20 +69,29 @@ class ModesResult:
 
     def summary(self) -> dict[str, Any]:
         """A JSON-able summary; mode numbers are 1-based (as in the PNG names)."""
+
         def named(i):
             if i is None:
                 return None
             return {"mode": i + 1, "freq_hz": round(float(self.freqs_hz[i]), 3)}
 
         return {
-            "damper": self.damper, "contact": self.contact,
+            "damper": self.damper,
+            "contact": self.contact,
             "freqs_hz": [round(float(x), 3) for x in self.freqs_hz],
             "first_bending_in_phase": named(self.in_phase),
             "first_bending_out_of_phase": named(self.out_of_phase),
-            "modes": [{"mode": k + 1, "freq_hz": round(float(f), 3), "label": lab or "-",
-                       "damper_mass_share": round(float(sh), 3)}
-                      for k, (f, lab, sh) in enumerate(
-                          zip(self.freqs_hz, self.labels, self.damper_share, strict=True))],
+            "modes": [
+                {
+                    "mode": k + 1,
+                    "freq_hz": round(float(f), 3),
+                    "label": lab or "-",
+                    "damper_mass_share": round(float(sh), 3),
+                }
+                for k, (f, lab, sh) in enumerate(
+                    zip(self.freqs_hz, self.labels, self.damper_share, strict=True)
+                )
+            ],
             "damper_free_free_hz": [round(float(x), 1) for x in self.damper_freqs_hz],
             "n_dofs": self.n_dofs,
             "files": self.files,
@@ -90,8 +99,10 @@ class ModesResult:
         }
 
 
-def classify_bending(response_disp: np.ndarray, excitation_disp: np.ndarray | None = None,
-                     ) -> tuple[list[str], int | None, int | None]:
+def classify_bending(
+    response_disp: np.ndarray,
+    excitation_disp: np.ndarray | None = None,
+) -> tuple[list[str], int | None, int | None]:
     """Name the first bending in-phase and out-of-phase modes from point displacements.
 
     ``response_disp`` is (n_modes, 2, 3): the displacement of the response
@@ -136,8 +147,12 @@ def classify_bending(response_disp: np.ndarray, excitation_disp: np.ndarray | No
     return labels, in_phase, out_phase
 
 
-def load_bodies(geom, comm=None, timings: dict[str, float] | None = None,
-                which: tuple[str, ...] = ("rig", "damper")) -> dict[str, ElasticBody]:
+def load_bodies(
+    geom,
+    comm=None,
+    timings: dict[str, float] | None = None,
+    which: tuple[str, ...] = ("rig", "damper"),
+) -> dict[str, ElasticBody]:
     """Read and assemble the rig (base clamped) and/or the damper (free) of ``geom``."""
     from mpi4py import MPI
 
@@ -147,9 +162,9 @@ def load_bodies(geom, comm=None, timings: dict[str, float] | None = None,
     for name in which:
         with stage(timings, "read_mesh"):
             fm = read_msh(geom.rig_msh if name == "rig" else geom.damper_msh, comm)
-        out[name] = assemble_body(fm, mat, name=name,
-                                  clamped="clamped" if name == "rig" else None,
-                                  timings=timings)
+        out[name] = assemble_body(
+            fm, mat, name=name, clamped="clamped" if name == "rig" else None, timings=timings
+        )
     return out
 
 
@@ -171,7 +186,7 @@ def _values_at(nodes: InterfaceNodes, local: np.ndarray, comm) -> np.ndarray:
     for i in range(nodes.n):
         b = nodes.local_block[i]
         if b >= 0:
-            v[i] = local[3 * b:3 * b + 3]
+            v[i] = local[3 * b : 3 * b + 3]
     return allsum(comm, v)
 
 
@@ -200,8 +215,12 @@ def _gather_shapes(V, arrays: list[np.ndarray], comm) -> BodyShapes | None:
         tt.append(t)
         xx.append(p)
         dd.append(d)
-    return BodyShapes(points=np.vstack(xx), cells=np.vstack(cc).ravel(),
-                      celltypes=np.concatenate(tt), disp=np.concatenate(dd, axis=1))
+    return BodyShapes(
+        points=np.vstack(xx),
+        cells=np.vstack(cc).ravel(),
+        celltypes=np.concatenate(tt),
+        disp=np.concatenate(dd, axis=1),
+    )
 
 
 def _write_xdmf(path: Path, V, arrays: list[np.ndarray], comm) -> Path:
@@ -222,8 +241,9 @@ def _write_xdmf(path: Path, V, arrays: list[np.ndarray], comm) -> Path:
     return path
 
 
-def _write_vtk(out: Path, body_shapes, freqs, labels, contact, dmp, damper_elastic,
-               damper_hz, comm) -> dict[str, str]:
+def _write_vtk(
+    out: Path, body_shapes, freqs, labels, contact, dmp, damper_elastic, damper_hz, comm
+) -> dict[str, str]:
     """modes_rig.pvd and modes_damper.pvd (VTU per mode, 1-based, with frequencies)."""
     from ..post.vtk_out import write_modes
 
@@ -235,8 +255,11 @@ def _write_vtk(out: Path, body_shapes, freqs, labels, contact, dmp, damper_elast
         return {}
     files = {"modes_rig_pvd": str(write_modes(out, "rig", body_shapes["rig"], freqs, labels))}
     dl = labels if contact == "stuck" else ["damper free-free"] * len(damper_hz)
-    files["modes_damper_pvd"] = str(write_modes(
-        out, "damper", body_shapes["damper"], freqs if contact == "stuck" else damper_hz, dl))
+    files["modes_damper_pvd"] = str(
+        write_modes(
+            out, "damper", body_shapes["damper"], freqs if contact == "stuck" else damper_hz, dl
+        )
+    )
     return files
 
 
@@ -278,15 +301,16 @@ def compute_modes(
         dn = locate_nodes(dmp, geom.contact.points, what="contact point")
         rn = locate_nodes(rig, geom.response_points, what="response point")
         en = locate_nodes(rig, geom.excitation_points, what="excitation point")
-    shift = -(2 * np.pi * FREE_SHIFT_HZ) ** 2
+    shift = -((2 * np.pi * FREE_SHIFT_HZ) ** 2)
     damper_hz = np.zeros(0)
     share: list[float] = []
     with stage(timings, "eigen"):
         if contact == "stuck":
             S = pair_springs(geom.contact, params)
             K, M, is_r, is_d = stuck_fe_system(rig, dmp, pn, dn, S)
-            sol = eigen_solve(K, M, n, sigma=shift, prefix="upd_modes_",
-                              what=f"{geom.damper} stuck modes")
+            sol = eigen_solve(
+                K, M, n, sigma=shift, prefix="upd_modes_", what=f"{geom.damper} stuck modes"
+            )
             rig_arrays, dmp_arrays = [], []
             tmp = dmp.M.createVecs()[0]
             for v in sol.vectors:
@@ -298,17 +322,26 @@ def compute_modes(
                         share.append(float(sub.dot(tmp)))
                     v.restoreSubVector(iset, sub)
         else:
-            sol = eigen_solve(rig.K, rig.M, n, sigma=0.0, prefix="upd_modes_",
-                              what="rig modes (damper free)")
+            sol = eigen_solve(
+                rig.K, rig.M, n, sigma=0.0, prefix="upd_modes_", what="rig modes (damper free)"
+            )
             rig_arrays = [v.getArray().copy() for v in sol.vectors]
             dmp_arrays = [np.zeros(dmp.n_local) for _ in rig_arrays]
-            dsol = eigen_solve(dmp.K, dmp.M, 12, sigma=shift, prefix="upd_free_",
-                               what=f"{geom.damper} damper free-free modes")
+            dsol = eigen_solve(
+                dmp.K,
+                dmp.M,
+                12,
+                sigma=shift,
+                prefix="upd_free_",
+                what=f"{geom.damper} damper free-free modes",
+            )
             damper_hz = dsol.freqs_hz[6:]
             damper_elastic = [v.getArray().copy() for v in dsol.vectors[6:]]
             if dsol.freqs_hz[5] > 1e-3 * dsol.freqs_hz[6] and comm.rank == 0:
-                log.warning("damper: the 6th free-free frequency %.3g Hz is not a rigid mode",
-                            dsol.freqs_hz[5])
+                log.warning(
+                    "damper: the 6th free-free frequency %.3g Hz is not a rigid mode",
+                    dsol.freqs_hz[5],
+                )
     freqs = sol.freqs_hz
     # response-point displacements; sign: the larger x-motion of the two response points is +x
     resp = np.zeros((len(freqs), 2, 3))
@@ -331,12 +364,18 @@ def compute_modes(
     with stage(timings, "output"):
         if out_dir is not None:
             out = Path(out_dir)
-            files["modes_rig_xdmf"] = str(_write_xdmf(out / "modes_rig.xdmf", rig.V,
-                                                      rig_arrays, comm))
+            files["modes_rig_xdmf"] = str(
+                _write_xdmf(out / "modes_rig.xdmf", rig.V, rig_arrays, comm)
+            )
             # stuck: the damper's part of each mode; free: its own free-free elastic modes
-            files["modes_damper_xdmf"] = str(_write_xdmf(
-                out / "modes_damper.xdmf", dmp.V,
-                dmp_arrays if contact == "stuck" else damper_elastic, comm))
+            files["modes_damper_xdmf"] = str(
+                _write_xdmf(
+                    out / "modes_damper.xdmf",
+                    dmp.V,
+                    dmp_arrays if contact == "stuck" else damper_elastic,
+                    comm,
+                )
+            )
         body_shapes = {}
         if shapes or out_dir is not None:
             for name, body, arrays in (("rig", rig, rig_arrays), ("damper", dmp, dmp_arrays)):
@@ -344,20 +383,44 @@ def compute_modes(
                 if bs is not None:
                     body_shapes[name] = bs
         if out_dir is not None:
-            files.update(_write_vtk(Path(out_dir), body_shapes, freqs, labels, contact, dmp,
-                                    None if contact == "stuck" else damper_elastic,
-                                    damper_hz, comm))
+            files.update(
+                _write_vtk(
+                    Path(out_dir),
+                    body_shapes,
+                    freqs,
+                    labels,
+                    contact,
+                    dmp,
+                    None if contact == "stuck" else damper_elastic,
+                    damper_hz,
+                    comm,
+                )
+            )
         if not shapes:
             body_shapes = {}
     res = ModesResult(
-        damper=geom.damper, contact=contact, freqs_hz=freqs, labels=labels,
-        in_phase=i_in, out_of_phase=i_out, response_disp=resp, damper_share=share_arr,
+        damper=geom.damper,
+        contact=contact,
+        freqs_hz=freqs,
+        labels=labels,
+        in_phase=i_in,
+        out_of_phase=i_out,
+        response_disp=resp,
+        damper_share=share_arr,
         damper_freqs_hz=damper_hz,
-        n_dofs={"rig": rig.n_dofs, "damper": dmp.n_dofs}, shapes=body_shapes, files=files,
+        n_dofs={"rig": rig.n_dofs, "damper": dmp.n_dofs},
+        shapes=body_shapes,
+        files=files,
         timings=dict(timings),
     )
-    info(log, comm, "%s, contact %s: %s Hz; first bending in-phase %s, out-of-phase %s",
-         geom.damper, contact, ", ".join(f"{f:.1f}" for f in freqs),
-         "none" if i_in is None else f"{freqs[i_in]:.1f} Hz",
-         "none" if i_out is None else f"{freqs[i_out]:.1f} Hz")
+    info(
+        log,
+        comm,
+        "%s, contact %s: %s Hz; first bending in-phase %s, out-of-phase %s",
+        geom.damper,
+        contact,
+        ", ".join(f"{f:.1f}" for f in freqs),
+        "none" if i_in is None else f"{freqs[i_in]:.1f} Hz",
+        "none" if i_out is None else f"{freqs[i_out]:.1f} Hz",
+    )
     return res

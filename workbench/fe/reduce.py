@@ -33,8 +33,16 @@ from .parallel import info
 
 log = logging.getLogger(__name__)
 
-_SOURCES = ("reduce.py", "craig_bampton.py", "rigid.py", "elasticity.py", "interface.py",
-            "mesh.py", "solvers.py", "parallel.py")
+_SOURCES = (
+    "reduce.py",
+    "craig_bampton.py",
+    "rigid.py",
+    "elasticity.py",
+    "interface.py",
+    "mesh.py",
+    "solvers.py",
+    "parallel.py",
+)
 N_MODES_MAX = 500
 RIGID_RATIO = 1e-6  # six eigenvalues below this fraction of the first elastic one
 
@@ -50,7 +58,9 @@ def reduce_inputs(geom, body: str, n_modes: int, rigid: bool) -> dict[str, Any]:
 
     pts, sets, _ = interface_points(geom, body)
     return {
-        "geometry_digest": geom.digest, "damper": geom.damper, "body": body,
+        "geometry_digest": geom.digest,
+        "damper": geom.damper,
+        "body": body,
         "method": "rigid" if rigid else "craig-bampton",
         "n_modes": 0 if rigid else int(n_modes),
         "material": dict(geom.material),
@@ -70,8 +80,9 @@ def model_digest(geom, body: str, n_modes: int, rigid: bool) -> tuple[dict[str, 
     return inputs, digest({"inputs": inputs, "code": code_version()})
 
 
-def cached_model(geom, body: str, *, n_modes: int = 12, rigid: bool = False,
-                 cache_dir: str | Path) -> Path | None:
+def cached_model(
+    geom, body: str, *, n_modes: int = 12, rigid: bool = False, cache_dir: str | Path
+) -> Path | None:
     """The cached file of this model if it exists with the right digest, else None."""
     inputs, dig = model_digest(geom, body, n_modes, rigid)
     path = model_path(Path(cache_dir), inputs, dig)
@@ -104,8 +115,13 @@ def load_contact(path: str | Path):
         if "contact" not in h:
             return None
         g = h["contact"]
-        return ContactSet(points=g["points"][()], frames=g["frames"][()], side=g["side"][()],
-                          weight=g["weight"][()], kind=str(g.attrs["kind"]))
+        return ContactSet(
+            points=g["points"][()],
+            frames=g["frames"][()],
+            side=g["side"][()],
+            weight=g["weight"][()],
+            kind=str(g.attrs["kind"]),
+        )
 
 
 def reduce_body(
@@ -194,11 +210,26 @@ def _rigid_damper(geom, inputs, dig, code, comm, timings) -> ReducedModel:
         n_nodes_global = fm.mesh.geometry.index_map().size_global
     pts, sets, _ = interface_points(geom, "damper")
     K, M, T = rigid_matrices(m, J, c, pts)
-    info(log, comm, "damper (rigid): mass %.4g kg (record %.4g kg), centroid %s m", m,
-             geom.damper_mass_kg, np.array2string(c, precision=5))
+    info(
+        log,
+        comm,
+        "damper (rigid): mass %.4g kg (record %.4g kg), centroid %s m",
+        m,
+        geom.damper_mass_kg,
+        np.array2string(c, precision=5),
+    )
     return ReducedModel(
-        name="damper", kind="rigid", K=K, M=M, T=T, node_coords=pts, node_sets=sets,
-        ref_point=c, inputs=inputs, digest=dig, code_version=code,
+        name="damper",
+        kind="rigid",
+        K=K,
+        M=M,
+        T=T,
+        node_coords=pts,
+        node_sets=sets,
+        ref_point=c,
+        inputs=inputs,
+        digest=dig,
+        code_version=code,
         n_full_dofs=3 * int(n_nodes_global),
     )
 
@@ -219,8 +250,17 @@ def _craig_bampton(geom, body, n_modes, inputs, dig, code, comm, timings) -> Red
     T = np.zeros((nb, cb.K.shape[0]))
     T[:, :nb] = np.eye(nb)
     rm = ReducedModel(
-        name=body, kind="craig-bampton", K=cb.K, M=cb.M, T=T, node_coords=pts, node_sets=sets,
-        mode_freqs_hz=cb.mode_freqs_hz, inputs=inputs, digest=dig, code_version=code,
+        name=body,
+        kind="craig-bampton",
+        K=cb.K,
+        M=cb.M,
+        T=T,
+        node_coords=pts,
+        node_sets=sets,
+        mode_freqs_hz=cb.mode_freqs_hz,
+        inputs=inputs,
+        digest=dig,
+        code_version=code,
         n_full_dofs=eb.n_dofs,
     )
     with stage(timings, "check"):
@@ -229,12 +269,22 @@ def _craig_bampton(geom, body, n_modes, inputs, dig, code, comm, timings) -> Red
         scale = lam[6] if len(lam) > 6 else 1.0
         n_rigid = int(np.sum(np.abs(lam) < RIGID_RATIO * scale))
         if n_rigid != 6 or scale <= 0:
-            raise SolveError(f"damper: the reduced free-free damper has {n_rigid} zero "
-                             "eigenvalues instead of 6", partial=rm)
-        info(log, comm, "damper: reduced free-free model has 6 rigid-body modes "
-                 "(|lambda| <= %.1e of the first elastic), first elastic %.0f Hz",
-                 np.abs(lam[:6]).max() / scale, np.sqrt(scale) / (2 * np.pi))
+            raise SolveError(
+                f"damper: the reduced free-free damper has {n_rigid} zero eigenvalues instead of 6",
+                partial=rm,
+            )
+        info(
+            log,
+            comm,
+            "damper: reduced free-free model has 6 rigid-body modes "
+            "(|lambda| <= %.1e of the first elastic), first elastic %.0f Hz",
+            np.abs(lam[:6]).max() / scale,
+            np.sqrt(scale) / (2 * np.pi),
+        )
     elif lam[0] <= 0:
-        raise SolveError(f"rig: the reduced clamped rig is not positive definite "
-                         f"(lowest eigenvalue {lam[0]:.3e})", partial=rm)
+        raise SolveError(
+            f"rig: the reduced clamped rig is not positive definite "
+            f"(lowest eigenvalue {lam[0]:.3e})",
+            partial=rm,
+        )
     return rm

@@ -70,8 +70,9 @@ def mass_properties(femesh: FEMesh, rho: float) -> tuple[float, np.ndarray, np.n
     return m, c, J
 
 
-def rigid_matrices(mass: float, inertia: np.ndarray, ref: np.ndarray,
-                   points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def rigid_matrices(
+    mass: float, inertia: np.ndarray, ref: np.ndarray, points: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """K (zero), M and T of a rigid body about its centroid ``ref`` for interface ``points``."""
     M = np.zeros((6, 6))
     M[:3, :3] = mass * np.eye(3)
@@ -79,6 +80,6 @@ def rigid_matrices(mass: float, inertia: np.ndarray, ref: np.ndarray,
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
     T = np.zeros((3 * len(pts), 6))
     for i, p in enumerate(pts):
-        T[3 * i:3 * i + 3, :3] = np.eye(3)
-        T[3 * i:3 * i + 3, 3:] = -skew(p - ref)
+        T[3 * i : 3 * i + 3, :3] = np.eye(3)
+        T[3 * i : 3 * i + 3, 3:] = -skew(p - ref)
     return np.zeros((6, 6)), M, T

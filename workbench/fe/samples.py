@@ -53,13 +53,23 @@ def _points_in(gmsh, pts: Sequence[Sequence[float]]):
 
 def _box_faces(gmsh, x0, x1, tol=1e-5):
     """Surface tags lying entirely inside the box [x0, x1] (OCC pads bounding boxes)."""
-    return [t for _, t in gmsh.model.getEntitiesInBoundingBox(
-        x0[0] - tol, x0[1] - tol, x0[2] - tol, x1[0] + tol, x1[1] + tol, x1[2] + tol, 2)]
+    return [
+        t
+        for _, t in gmsh.model.getEntitiesInBoundingBox(
+            x0[0] - tol, x0[1] - tol, x0[2] - tol, x1[0] + tol, x1[1] + tol, x1[2] + tol, 2
+        )
+    ]
 
 
-def beam_msh(path: str | Path, *, length: float = 0.2, width: float = 0.02,
-             thickness: float = 0.01, lc: float = 0.005,
-             points: Sequence[Sequence[float]] = ()) -> Path:
+def beam_msh(
+    path: str | Path,
+    *,
+    length: float = 0.2,
+    width: float = 0.02,
+    thickness: float = 0.01,
+    lc: float = 0.005,
+    points: Sequence[Sequence[float]] = (),
+) -> Path:
     """A beam x in [0, thickness], y in [0, width], z in [0, length], clamped at z = 0.
 
     Physical groups: volume "beam", surface "clamped". ``points`` become mesh nodes.
@@ -78,9 +88,15 @@ def beam_msh(path: str | Path, *, length: float = 0.2, width: float = 0.02,
         return _mesh_and_write(gmsh, path, lc)
 
 
-def block_msh(path: str | Path, *, size: Sequence[float] = (0.02, 0.016, 0.01),
-              origin: Sequence[float] = (0.0, 0.0, 0.0), lc: float = 0.004,
-              points: Sequence[Sequence[float]] = (), name: str = "damper") -> Path:
+def block_msh(
+    path: str | Path,
+    *,
+    size: Sequence[float] = (0.02, 0.016, 0.01),
+    origin: Sequence[float] = (0.0, 0.0, 0.0),
+    lc: float = 0.004,
+    points: Sequence[Sequence[float]] = (),
+    name: str = "damper",
+) -> Path:
     """A free block ``origin + [0, size]``; physical volume ``name``; ``points`` embedded."""
     check_range("lc", lc, 0.0, lo_open=True, unit="m")
     path = Path(path)
@@ -94,8 +110,15 @@ def block_msh(path: str | Path, *, size: Sequence[float] = (0.02, 0.016, 0.01),
         return _mesh_and_write(gmsh, path, lc)
 
 
-def cantilever_bending_hz(length: float, thickness: float, E: float, rho: float, nu: float,
-                          mode: int = 1, timoshenko: bool = True) -> float:
+def cantilever_bending_hz(
+    length: float,
+    thickness: float,
+    E: float,
+    rho: float,
+    nu: float,
+    mode: int = 1,
+    timoshenko: bool = True,
+) -> float:
     """Bending frequency (Hz) of a clamped-free rectangular beam, bending across ``thickness``.
 
     Euler-Bernoulli: ``f = (b_n L)^2 / (2 pi L^2) sqrt(E I / (rho A))`` with
@@ -114,10 +137,19 @@ def cantilever_bending_hz(length: float, thickness: float, E: float, rho: float,
     return f
 
 
-def toy_rig(out_dir: str | Path, *, lc: float = 0.004, n_per_line: int = 5,
-            blade_length: float = 0.1, blade_thickness: float = 0.005,
-            gap: float = 0.02, width: float = 0.02, contact_height: float = 0.075,
-            damper_height: float = 0.008, material: dict[str, float] | None = None):
+def toy_rig(
+    out_dir: str | Path,
+    *,
+    lc: float = 0.004,
+    n_per_line: int = 5,
+    blade_length: float = 0.1,
+    blade_thickness: float = 0.005,
+    gap: float = 0.02,
+    width: float = 0.02,
+    contact_height: float = 0.075,
+    damper_height: float = 0.008,
+    material: dict[str, float] | None = None,
+):
     """Two blades on a base with a block damper between them; returns a BuiltGeometry.
 
     Axes as in the workbench: x from blade 1 to blade 2, y along the damper,
@@ -168,23 +200,42 @@ def toy_rig(out_dir: str | Path, *, lc: float = 0.004, n_per_line: int = 5,
         gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, clamp), "clamped")
         for k, x in ((1, -g2), (2, g2)):
             faces = _box_faces(gmsh, (x, 0, 0), (x, width, L))
-            gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, faces),
-                                       f"contact_face_{k}")
+            gmsh.model.setPhysicalName(
+                2, gmsh.model.addPhysicalGroup(2, faces), f"contact_face_{k}"
+            )
         _mesh_and_write(gmsh, rig_msh, lc)
     z0 = contact_height - damper_height / 2
-    damper_msh = block_msh(out / "damper.msh", size=(gap, width, damper_height),
-                           origin=(-g2, 0, z0), lc=lc, points=pts)
+    damper_msh = block_msh(
+        out / "damper.msh", size=(gap, width, damper_height), origin=(-g2, 0, z0), lc=lc, points=pts
+    )
     vol = gap * width * damper_height
-    params = {"toy_rig": dict(lc=lc, n_per_line=n_per_line, blade_length=blade_length,
-                              blade_thickness=blade_thickness, gap=gap, width=width,
-                              contact_height=contact_height, damper_height=damper_height),
-              "material": material}
+    params = {
+        "toy_rig": dict(
+            lc=lc,
+            n_per_line=n_per_line,
+            blade_length=blade_length,
+            blade_thickness=blade_thickness,
+            gap=gap,
+            width=width,
+            contact_height=contact_height,
+            damper_height=damper_height,
+        ),
+        "material": material,
+    }
     return BuiltGeometry(
-        damper="block", rig_msh=rig_msh, damper_msh=damper_msh,
+        damper="block",
+        rig_msh=rig_msh,
+        damper_msh=damper_msh,
         contact=ContactSet(points=pts, frames=frames, side=side, weight=weight, kind="line"),
-        excitation_points=exc, response_points=resp,
-        excitation_direction=np.array([1.0, 0, 0]), response_direction=np.array([1.0, 0, 0]),
-        damper_volume_m3=vol, damper_mass_kg=vol * material["rho_kg_m3"],
+        excitation_points=exc,
+        response_points=resp,
+        excitation_direction=np.array([1.0, 0, 0]),
+        response_direction=np.array([1.0, 0, 0]),
+        damper_volume_m3=vol,
+        damper_mass_kg=vol * material["rho_kg_m3"],
         damper_centroid=np.array([0.0, width / 2, contact_height]),
-        material=material, params=params, digest=digest(params), stats={},
+        material=material,
+        params=params,
+        digest=digest(params),
+        stats={},
     )

@@ -77,8 +77,16 @@ class EigenSolution:
         return self.eps.getST().getKSP().getPC().getFactorMatrix()
 
 
-def eigen_solve(A, B, n: int, *, sigma: float = 0.0, prefix: str = "upd_modes_",
-                what: str = "modes", tol: float = EIGEN_TOL) -> EigenSolution:
+def eigen_solve(
+    A,
+    B,
+    n: int,
+    *,
+    sigma: float = 0.0,
+    prefix: str = "upd_modes_",
+    what: str = "modes",
+    tol: float = EIGEN_TOL,
+) -> EigenSolution:
     """The ``n`` eigenpairs of the symmetric pencil (A, B) closest to ``sigma``.
 
     A is symmetric; B symmetric positive semi-definite (Dirichlet rows carry
@@ -107,7 +115,8 @@ def eigen_solve(A, B, n: int, *, sigma: float = 0.0, prefix: str = "upd_modes_",
         except Exception as e:  # noqa: BLE001 - PETSc.Error carries only an error code
             raise SolveError(
                 f"{what}: the eigen solve failed ({e}); for more MUMPS work space try "
-                f"PETSC_OPTIONS='-{prefix}st_mat_mumps_icntl_14 200'") from e
+                f"PETSC_OPTIONS='-{prefix}st_mat_mumps_icntl_14 200'"
+            ) from e
     nconv = eps.getConverged()
     lam = np.array([eps.getEigenvalue(i).real for i in range(nconv)])
     order = np.argsort(np.abs(lam - sigma), kind="stable")[:n]

@@ -42,6 +42,15 @@ def read_msh(path: str | Path, comm: Any = None, rank: int = 0) -> Any:
 
 
 __all__ = [
-    "DAMPERS", "BuiltGeometry", "ContactSet", "GeometryParams", "Layout", "build_geometry",
-    "code_version", "geometry_digest", "load_geometry_params", "make_layout", "read_msh",
+    "DAMPERS",
+    "BuiltGeometry",
+    "ContactSet",
+    "GeometryParams",
+    "Layout",
+    "build_geometry",
+    "code_version",
+    "geometry_digest",
+    "load_geometry_params",
+    "make_layout",
+    "read_msh",
 ]

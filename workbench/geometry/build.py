@@ -33,8 +33,15 @@ from .records import BuiltGeometry, ContactSet
 
 log = logging.getLogger(__name__)
 
-_SOURCES = ("build.py", "layout.py", "occ.py", "mshio.py", "params.py", "records.py",
-            "seat_tools.py")
+_SOURCES = (
+    "build.py",
+    "layout.py",
+    "occ.py",
+    "mshio.py",
+    "params.py",
+    "records.py",
+    "seat_tools.py",
+)
 MATCH_TOL_M = 1e-9  # a contact point must be a vertex of both meshes to this distance
 
 
@@ -123,11 +130,13 @@ def _reusable(h5: Path, dig: str) -> BuiltGeometry | None:
     try:
         old = BuiltGeometry.load(h5)
     except (OSError, KeyError, ValueError) as e:
-        log.warning("geometry: cached %s is unreadable (%s: %s); rebuilding it", h5,
-                    type(e).__name__, e)
+        log.warning(
+            "geometry: cached %s is unreadable (%s: %s); rebuilding it", h5, type(e).__name__, e
+        )
         return None
     needed = [old.rig_msh, old.damper_msh] + [
-        h5.parent / f"{b}.{ext}" for b in ("rig", "damper") for ext in ("xdmf", "h5")]
+        h5.parent / f"{b}.{ext}" for b in ("rig", "damper") for ext in ("xdmf", "h5")
+    ]
     if old.digest == dig and all(p.is_file() for p in needed):
         return old
     return None
@@ -158,8 +167,11 @@ def _build(lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
     what = "rig"
     try:
         with gmsh_session() as gmsh:
-            log.info("geometry: meshing the rig (size %g mm, %g mm at the contacts)",
-                     gp.rig.mesh.size_mm, min(gp.rig.mesh.contact_size_mm, lay.contact_spacing))
+            log.info(
+                "geometry: meshing the rig (size %g mm, %g mm at the contacts)",
+                gp.rig.mesh.size_mm,
+                min(gp.rig.mesh.contact_size_mm, lay.contact_spacing),
+            )
             build_rig(gmsh, lay, rig_msh)
             done["rig_msh"] = rig_msh
             timings["mesh_rig_s"] = time.perf_counter() - t0
@@ -172,8 +184,11 @@ def _build(lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
     except SolveError as e:
         raise SolveError(str(e), partial=done) from None
     except Exception as e:  # noqa: BLE001 - gmsh raises bare Exceptions; report them in one line
-        raise SolveError(f"gmsh failed while building the {what}: {e} (the inputs passed the "
-                         "fit checks; please report this case)", partial=done) from None
+        raise SolveError(
+            f"gmsh failed while building the {what}: {e} (the inputs passed the "
+            "fit checks; please report this case)",
+            partial=done,
+        ) from None
     t1 = time.perf_counter()
     rig_info, damper_info = mesh_file_info(rig_msh), mesh_file_info(damper_msh)
     timings["read_back_s"] = time.perf_counter() - t1
@@ -184,7 +199,8 @@ def _build(lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
         raise SolveError(
             f"a contact point is {stats['max_point_offset_m']:.3g} m from the nearest mesh vertex "
             f"(allowed {MATCH_TOL_M:g} m): the meshes do not match node to node",
-            partial=dict(done, stats=stats))
+            partial=dict(done, stats=stats),
+        )
     t1 = time.perf_counter()
     write_xdmf(rig_msh, out_dir / "rig.xdmf", "rig")
     write_xdmf(damper_msh, out_dir / "damper.xdmf", "damper")
@@ -194,8 +210,10 @@ def _build(lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
     rho = gp.rig.material.rho_kg_m3
     vol_exact = lay.volume * 1e-9
     stats.update(
-        rig_n_nodes=rig_info.n_nodes, rig_n_cells=rig_info.n_cells,
-        damper_n_nodes=damper_info.n_nodes, damper_n_cells=damper_info.n_cells,
+        rig_n_nodes=rig_info.n_nodes,
+        rig_n_cells=rig_info.n_cells,
+        damper_n_nodes=damper_info.n_nodes,
+        damper_n_cells=damper_info.n_cells,
         n_nodes=rig_info.n_nodes + damper_info.n_nodes,
         n_cells=rig_info.n_cells + damper_info.n_cells,
         n_contact_pairs=lay.n_pairs,
@@ -209,24 +227,45 @@ def _build(lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
         damper_size_mm=min(gp.rig.mesh.damper_size_mm, gp.rig.mesh.size_mm),
         code_version=code_version(),
         timings_s={k: round(v, 3) for k, v in timings.items()},
-        **{k: (float(v) if isinstance(v, (float, np.floating)) else v)
-           for k, v in lay.notes.items()},
+        **{
+            k: (float(v) if isinstance(v, (float, np.floating)) else v)
+            for k, v in lay.notes.items()
+        },
     )
     scale = 1e-3 if lay.kind == "line" else 1e-6
-    contact = ContactSet(points=pts, frames=lay.frames.copy(), side=lay.side.astype(np.int64),
-                         weight=lay.weight * scale, kind=lay.kind)
+    contact = ContactSet(
+        points=pts,
+        frames=lay.frames.copy(),
+        side=lay.side.astype(np.int64),
+        weight=lay.weight * scale,
+        kind=lay.kind,
+    )
     rec = BuiltGeometry(
-        damper=gp.damper, rig_msh=rig_msh, damper_msh=damper_msh, contact=contact,
-        excitation_points=lay.excitation * 1e-3, response_points=lay.response * 1e-3,
+        damper=gp.damper,
+        rig_msh=rig_msh,
+        damper_msh=damper_msh,
+        contact=contact,
+        excitation_points=lay.excitation * 1e-3,
+        response_points=lay.response * 1e-3,
         excitation_direction=np.array([1.0, 0.0, 0.0]),
         response_direction=np.array([1.0, 0.0, 0.0]),
-        damper_volume_m3=damper_info.volume, damper_mass_kg=rho * damper_info.volume,
-        damper_centroid=damper_info.centroid, material=gp.rig.material.as_si(),
-        params=gp.as_dict(), digest=dig, stats=stats,
+        damper_volume_m3=damper_info.volume,
+        damper_mass_kg=rho * damper_info.volume,
+        damper_centroid=damper_info.centroid,
+        material=gp.rig.material.as_si(),
+        params=gp.as_dict(),
+        digest=dig,
+        stats=stats,
     )
     rec.save(out_dir / "geometry.h5")
-    log.info("geometry: %d + %d nodes, %d contact pairs, max pair gap %.3g m, written to %s",
-             rig_info.n_nodes, damper_info.n_nodes, lay.n_pairs, stats["max_pair_gap_m"], out_dir)
+    log.info(
+        "geometry: %d + %d nodes, %d contact pairs, max pair gap %.3g m, written to %s",
+        rig_info.n_nodes,
+        damper_info.n_nodes,
+        lay.n_pairs,
+        stats["max_pair_gap_m"],
+        out_dir,
+    )
     return rec
 
 

@@ -143,17 +143,27 @@ def _rig(rig: RigParams) -> dict:
     if tip_gap < fit.clearance_mm:
         hi = (bl.gap_mm - fit.clearance_mm) / 2.0
         raise _fit_error(
-            "rig.platform.overhang_mm", pf.overhang_mm, f"rig.platform.overhang_mm <= {hi:.4g} mm",
+            "rig.platform.overhang_mm",
+            pf.overhang_mm,
+            f"rig.platform.overhang_mm <= {hi:.4g} mm",
             f"the two platforms would leave a tip gap of {tip_gap:.4g} mm; at least "
-            f"rig.fit.clearance_mm = {fit.clearance_mm:g} mm is needed so they do not touch")
+            f"rig.fit.clearance_mm = {fit.clearance_mm:g} mm is needed so they do not touch",
+        )
     if b.length_mm < bl.gap_mm + 2.0 * bl.thickness_mm:
         need = bl.gap_mm + 2.0 * bl.thickness_mm
-        raise _fit_error("rig.base.length_mm", b.length_mm, f"rig.base.length_mm >= {need:.4g} mm",
-                         "the base must carry both blades (gap + 2 x thickness)")
+        raise _fit_error(
+            "rig.base.length_mm",
+            b.length_mm,
+            f"rig.base.length_mm >= {need:.4g} mm",
+            "the base must carry both blades (gap + 2 x thickness)",
+        )
     if b.width_mm < bl.width_mm:
-        raise _fit_error("rig.base.width_mm", b.width_mm,
-                         f"rig.base.width_mm >= {bl.width_mm:g} mm",
-                         "the base must carry the whole blade width")
+        raise _fit_error(
+            "rig.base.width_mm",
+            b.width_mm,
+            f"rig.base.width_mm >= {bl.width_mm:g} mm",
+            "the base must carry the whole blade width",
+        )
     z_base = b.height_mm
     z_tip = z_base + bl.height_mm
     # steps below _SAME_MM are no steps (see _check_features): snap them shut
@@ -164,10 +174,12 @@ def _rig(rig: RigParams) -> dict:
     if z_root < z_base + fit.clearance_mm or pf.top_below_tip_mm >= bl.height_mm:
         hi = bl.height_mm - depth - fit.clearance_mm
         raise _fit_error(
-            "rig.platform.top_below_tip_mm", pf.top_below_tip_mm,
+            "rig.platform.top_below_tip_mm",
+            pf.top_below_tip_mm,
             f"0 <= rig.platform.top_below_tip_mm <= {max(hi, 0.0):.4g} mm",
             f"the platform ({depth:.4g} mm deep: tip {pf.tip_thickness_mm:g} mm + inclined face "
-            f"{drop:.4g} mm) must sit on the blade, above the base")
+            f"{drop:.4g} mm) must sit on the blade, above the base",
+        )
     _check_features(rig)
     z_tb = z_top - pf.tip_thickness_mm  # z of the tip edge of the inclined face
     x_tip = half_gap - pf.overhang_mm
@@ -176,8 +188,14 @@ def _rig(rig: RigParams) -> dict:
     normals = np.array([[cb, 0.0, -sb], [-cb, 0.0, -sb]])
     down = np.array([[-sb, 0.0, -cb], [sb, 0.0, -cb]])
     blades = (
-        Box(-half_gap - bl.thickness_mm, -bl.width_mm / 2, z_base, bl.thickness_mm, bl.width_mm,
-            bl.height_mm),
+        Box(
+            -half_gap - bl.thickness_mm,
+            -bl.width_mm / 2,
+            z_base,
+            bl.thickness_mm,
+            bl.width_mm,
+            bl.height_mm,
+        ),
         Box(half_gap, -bl.width_mm / 2, z_base, bl.thickness_mm, bl.width_mm, bl.height_mm),
     )
     poly1 = np.array([[-half_gap, z_root], [-x_tip, z_tb], [-x_tip, z_top], [-half_gap, z_top]])
@@ -192,29 +210,51 @@ def _rig(rig: RigParams) -> dict:
         m = fit.edge_margin_mm
         if not m <= rec.height_mm <= bl.height_mm - m:
             raise _fit_error(
-                f"rig.{name}.height_mm", rec.height_mm,
+                f"rig.{name}.height_mm",
+                rec.height_mm,
                 f"{m:g} <= rig.{name}.height_mm <= {bl.height_mm - m:.4g} mm",
                 "the point must lie on the blade's outer face, rig.fit.edge_margin_mm "
-                "from its edges")
+                "from its edges",
+            )
         if abs(rec.y_mm) > bl.width_mm / 2 - m:
             lim = bl.width_mm / 2 - m
-            raise _fit_error(f"rig.{name}.y_mm", rec.y_mm,
-                             f"{-lim:.4g} <= rig.{name}.y_mm <= {lim:.4g} mm",
-                             "the point must lie on the blade's outer face")
-        pts[name] = np.array([[outer[0], rec.y_mm, z_base + rec.height_mm],
-                              [outer[1], rec.y_mm, z_base + rec.height_mm]])
+            raise _fit_error(
+                f"rig.{name}.y_mm",
+                rec.y_mm,
+                f"{-lim:.4g} <= rig.{name}.y_mm <= {lim:.4g} mm",
+                "the point must lie on the blade's outer face",
+            )
+        pts[name] = np.array(
+            [
+                [outer[0], rec.y_mm, z_base + rec.height_mm],
+                [outer[1], rec.y_mm, z_base + rec.height_mm],
+            ]
+        )
     if np.linalg.norm(pts["excitation"][0] - pts["response"][0]) < fit.edge_margin_mm:
-        raise _fit_error("rig.response.height_mm", rig.response.height_mm,
-                         "a point at least rig.fit.edge_margin_mm from the excitation point",
-                         "the excitation and response points coincide")
+        raise _fit_error(
+            "rig.response.height_mm",
+            rig.response.height_mm,
+            "a point at least rig.fit.edge_margin_mm from the excitation point",
+            "the excitation and response points coincide",
+        )
     return dict(
-        beta=beta, z_ridge=z_ridge, normals=normals, down=down,
-        s_tip=x_tip / sb, s_root=half_gap / sb,
+        beta=beta,
+        z_ridge=z_ridge,
+        normals=normals,
+        down=down,
+        s_tip=x_tip / sb,
+        s_root=half_gap / sb,
         base=Box(-base_len / 2, -base_wid / 2, 0.0, base_len, base_wid, b.height_mm),
-        blades=blades, platform_xz=(poly1, poly2),
-        platform_y=(-plat_wid / 2, plat_wid / 2), outer_x=outer,
-        excitation=pts["excitation"], response=pts["response"],
-        z_root=z_root, z_base=z_base, half_gap=half_gap, min_feature=fit.min_feature_mm,
+        blades=blades,
+        platform_xz=(poly1, poly2),
+        platform_y=(-plat_wid / 2, plat_wid / 2),
+        outer_x=outer,
+        excitation=pts["excitation"],
+        response=pts["response"],
+        z_root=z_root,
+        z_base=z_base,
+        half_gap=half_gap,
+        min_feature=fit.min_feature_mm,
     )
 
 
@@ -223,22 +263,48 @@ def _check_features(rig: RigParams) -> None:
     f = rig.fit.min_feature_mm
     b, bl, pf = rig.base, rig.blade, rig.platform
     if pf.tip_thickness_mm < f:
-        raise _fit_error("rig.platform.tip_thickness_mm", pf.tip_thickness_mm,
-                         f"rig.platform.tip_thickness_mm >= rig.fit.min_feature_mm = {f:g} mm",
-                         "the platform tip face would be a sliver")
-    _step("rig.platform.top_below_tip_mm", pf.top_below_tip_mm, pf.top_below_tip_mm, f,
-          "the step from the platform top to the blade tip")
-    _step("rig.platform.width_mm", pf.width_mm, (pf.width_mm - bl.width_mm) / 2, f,
-          "the axial step between the platform and the blade on each side")
-    _step("rig.base.length_mm", b.length_mm, (b.length_mm - bl.gap_mm) / 2 - bl.thickness_mm, f,
-          "the ledge of the base beside each blade")
-    _step("rig.base.width_mm", b.width_mm, (b.width_mm - bl.width_mm) / 2, f,
-          "the ledge of the base in front of and behind the blades")
+        raise _fit_error(
+            "rig.platform.tip_thickness_mm",
+            pf.tip_thickness_mm,
+            f"rig.platform.tip_thickness_mm >= rig.fit.min_feature_mm = {f:g} mm",
+            "the platform tip face would be a sliver",
+        )
+    _step(
+        "rig.platform.top_below_tip_mm",
+        pf.top_below_tip_mm,
+        pf.top_below_tip_mm,
+        f,
+        "the step from the platform top to the blade tip",
+    )
+    _step(
+        "rig.platform.width_mm",
+        pf.width_mm,
+        (pf.width_mm - bl.width_mm) / 2,
+        f,
+        "the axial step between the platform and the blade on each side",
+    )
+    _step(
+        "rig.base.length_mm",
+        b.length_mm,
+        (b.length_mm - bl.gap_mm) / 2 - bl.thickness_mm,
+        f,
+        "the ledge of the base beside each blade",
+    )
+    _step(
+        "rig.base.width_mm",
+        b.width_mm,
+        (b.width_mm - bl.width_mm) / 2,
+        f,
+        "the ledge of the base in front of and behind the blades",
+    )
     tip_gap = bl.gap_mm - 2 * pf.overhang_mm
     if tip_gap < f:
-        raise _fit_error("rig.platform.overhang_mm", pf.overhang_mm,
-                         f"rig.platform.overhang_mm <= {(bl.gap_mm - f) / 2:.4g} mm",
-                         f"the gap between the platform tips would be {tip_gap:.3g} mm")
+        raise _fit_error(
+            "rig.platform.overhang_mm",
+            pf.overhang_mm,
+            f"rig.platform.overhang_mm <= {(bl.gap_mm - f) / 2:.4g} mm",
+            f"the gap between the platform tips would be {tip_gap:.3g} mm",
+        )
 
 
 def _frames(t1: np.ndarray, n: np.ndarray) -> np.ndarray:
@@ -257,59 +323,80 @@ def _check_fit(gp: GeometryParams, g: dict, seat: dict) -> None:
     sig = np.array([(e - ridge) @ g["down"][0 if e[0] < 0 else 1] for e in ends])
     lo_ok, hi_ok = g["s_tip"] + m, g["s_root"] - m
     half_w = rig.platform.width_mm / 2 - m
-    where = ("the contact lines" if seat["kind"] == "line" else "the contact faces")
+    where = "the contact lines" if seat["kind"] == "line" else "the contact faces"
     pl = seat["placement"]
     small, large, long_ = shape.fit_blame(gp, g, pl, lo_ok, hi_ok, half_w)
-    face = (f"the inclined platform faces span {g['s_tip']:.4g} to {g['s_root']:.4g} mm down "
-            f"the slope from the ridge; rig.fit.edge_margin_mm = {m:g} mm")
+    face = (
+        f"the inclined platform faces span {g['s_tip']:.4g} to {g['s_root']:.4g} mm down "
+        f"the slope from the ridge; rig.fit.edge_margin_mm = {m:g} mm"
+    )
     if sig.min() < lo_ok - 1e-9:
-        raise _fit_error(*small, f"{where} would start {sig.min():.4g} mm down the slope, above "
-                         f"the platform tip edge: {face}")
+        raise _fit_error(
+            *small,
+            f"{where} would start {sig.min():.4g} mm down the slope, above "
+            f"the platform tip edge: {face}",
+        )
     if sig.max() > hi_ok + 1e-9:
-        raise _fit_error(*large, f"{where} would reach {sig.max():.4g} mm down the slope, below "
-                         f"the platform root: {face}")
+        raise _fit_error(
+            *large,
+            f"{where} would reach {sig.max():.4g} mm down the slope, below "
+            f"the platform root: {face}",
+        )
     if np.abs(ends[:, 1]).max() > half_w + 1e-9:
-        raise _fit_error(*long_, f"{where} would reach y = +-{np.abs(ends[:, 1]).max():.4g} mm, "
-                         f"beyond the platform width rig.platform.width_mm = "
-                         f"{rig.platform.width_mm:g} mm less the edge margin")
+        raise _fit_error(
+            *long_,
+            f"{where} would reach y = +-{np.abs(ends[:, 1]).max():.4g} mm, "
+            f"beyond the platform width rig.platform.width_mm = "
+            f"{rig.platform.width_mm:g} mm less the edge margin",
+        )
     x_max = g["half_gap"] - clr
     if seat["x_extent"] > x_max + 1e-9:
         raise _fit_error(
             *shape.hit_blame(gp, g, pl, x_max),
             f"the damper would reach x = +-{seat['x_extent']:.4g} mm and hit the blades "
             f"(inner faces at +-{g['half_gap']:.4g} mm, clearance rig.fit.clearance_mm = "
-            f"{clr:g} mm)")
+            f"{clr:g} mm)",
+        )
     if seat["z_min"] < g["z_base"] + clr - 1e-9:
         raise _fit_error(
-            "rig.blade.height_mm", rig.blade.height_mm,
+            "rig.blade.height_mm",
+            rig.blade.height_mm,
             "a blade tall enough to keep the damper above the base",
             f"the damper would reach down to z = {seat['z_min']:.4g} mm, below the base top "
-            f"z = {g['z_base']:.4g} mm plus the clearance")
+            f"z = {g['z_base']:.4g} mm plus the clearance",
+        )
 
 
 def _check_mesh(gp: GeometryParams, g: dict, seat: dict, spacing: float) -> None:
     """Refuse sizes that would produce an unreasonable number of elements."""
     rig, ms = gp.rig, gp.rig.mesh
     vol_rig = rig.base.length_mm * rig.base.width_mm * rig.base.height_mm + 2 * (
-        rig.blade.thickness_mm * rig.blade.width_mm * rig.blade.height_mm)
-    for name, h, vol in (("rig.mesh.size_mm", ms.size_mm, vol_rig),
-                         ("rig.mesh.damper_size_mm", min(ms.damper_size_mm, ms.size_mm),
-                          seat["volume"])):
+        rig.blade.thickness_mm * rig.blade.width_mm * rig.blade.height_mm
+    )
+    for name, h, vol in (
+        ("rig.mesh.size_mm", ms.size_mm, vol_rig),
+        ("rig.mesh.damper_size_mm", min(ms.damper_size_mm, ms.size_mm), seat["volume"]),
+    ):
         n_est = TETS_PER_H3 * vol / h**3
         if n_est > MAX_TETS:
             h_min = (TETS_PER_H3 * vol / MAX_TETS) ** (1 / 3)
             raise InputError(
-                name, h, f"{name} >= {h_min:.3g} mm",
-                f"about {n_est:.3g} tetrahedra; the limit is {MAX_TETS:.3g}")
+                name,
+                h,
+                f"{name} >= {h_min:.3g} mm",
+                f"about {n_est:.3g} tetrahedra; the limit is {MAX_TETS:.3g}",
+            )
     h_c = min(ms.contact_size_mm, spacing)
     n_ref = seat["points"].shape[0] * refinement_tets(h_c, ms.size_mm, ms.refine_distance_mm)
     if n_ref > MAX_TETS:
         raise InputError(
-            "rig.mesh.contact_size_mm", ms.contact_size_mm,
+            "rig.mesh.contact_size_mm",
+            ms.contact_size_mm,
             "a larger contact size, fewer contact points or a shorter rig.mesh.refine_distance_mm",
             f"about {n_ref:.3g} tetrahedra around the contact points "
             f"({seat['points'].shape[0]} points, {spacing:.3g} mm apart); the limit is "
-            f"{MAX_TETS:.3g}")
+            f"{MAX_TETS:.3g}",
+        )
 
 
 def refinement_tets(h_c: float, h: float, dist: float) -> float:
@@ -340,15 +427,35 @@ def make_layout(gp: GeometryParams) -> Layout:
     spacing = float(dd[:, 1].min())
     _check_mesh(gp, g, seat, spacing)
     notes = dict(seat["notes"])
-    notes.update(z_ridge_mm=g["z_ridge"],
-                 tip_gap_mm=2 * (g["half_gap"] - gp.rig.platform.overhang_mm),
-                 contact_spacing_mm=spacing)
+    notes.update(
+        z_ridge_mm=g["z_ridge"],
+        tip_gap_mm=2 * (g["half_gap"] - gp.rig.platform.overhang_mm),
+        contact_spacing_mm=spacing,
+    )
     return Layout(
-        params=gp, beta=g["beta"], z_ridge=g["z_ridge"], normals=g["normals"], down=g["down"],
-        s_tip=g["s_tip"], s_root=g["s_root"], base=g["base"], blades=g["blades"],
-        platform_xz=g["platform_xz"], platform_y=g["platform_y"], outer_x=g["outer_x"],
-        excitation=g["excitation"], response=g["response"], damper=seat["placement"],
-        points=pts, frames=_frames(seat["t1"], seat["n"]), side=seat["side"],
-        weight=seat["weight"], kind=seat["kind"], extent=seat["extent"],
-        volume=seat["volume"], centroid=seat["centroid"], contact_spacing=spacing, notes=notes,
+        params=gp,
+        beta=g["beta"],
+        z_ridge=g["z_ridge"],
+        normals=g["normals"],
+        down=g["down"],
+        s_tip=g["s_tip"],
+        s_root=g["s_root"],
+        base=g["base"],
+        blades=g["blades"],
+        platform_xz=g["platform_xz"],
+        platform_y=g["platform_y"],
+        outer_x=g["outer_x"],
+        excitation=g["excitation"],
+        response=g["response"],
+        damper=seat["placement"],
+        points=pts,
+        frames=_frames(seat["t1"], seat["n"]),
+        side=seat["side"],
+        weight=seat["weight"],
+        kind=seat["kind"],
+        extent=seat["extent"],
+        volume=seat["volume"],
+        centroid=seat["centroid"],
+        contact_spacing=spacing,
+        notes=notes,
     )

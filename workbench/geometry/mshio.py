@@ -62,8 +62,13 @@ def mesh_file_info(path: str | Path) -> MeshFileInfo:
                 _, c = gmsh.model.mesh.getNodesForPhysicalGroup(0, tag)
                 point_groups[name] = np.asarray(c).reshape(-1, 3)
         return MeshFileInfo(
-            n_nodes=int(len(tags)), n_cells=int(conn.shape[0]), vertices=vert, volume=volume,
-            centroid=centroid, groups=groups, point_groups=point_groups,
+            n_nodes=int(len(tags)),
+            n_cells=int(conn.shape[0]),
+            vertices=vert,
+            volume=volume,
+            centroid=centroid,
+            groups=groups,
+            point_groups=point_groups,
         )
 
 

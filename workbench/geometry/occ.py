@@ -43,12 +43,16 @@ from .layout import Layout
 log = logging.getLogger(__name__)
 
 GROUPS = {
-    "rig": {3: {"base": 1, "blade_1": 2, "blade_2": 3},
-            2: {"clamped": 11, "contact_face_1": 12, "contact_face_2": 13},
-            0: {"contact_nodes_1": 21, "contact_nodes_2": 22, "excitation": 23, "response": 24}},
-    "damper": {3: {"damper": 1},
-               2: {"contact_face_1": 12, "contact_face_2": 13},
-               0: {"contact_nodes_1": 21, "contact_nodes_2": 22}},
+    "rig": {
+        3: {"base": 1, "blade_1": 2, "blade_2": 3},
+        2: {"clamped": 11, "contact_face_1": 12, "contact_face_2": 13},
+        0: {"contact_nodes_1": 21, "contact_nodes_2": 22, "excitation": 23, "response": 24},
+    },
+    "damper": {
+        3: {"damper": 1},
+        2: {"contact_face_1": 12, "contact_face_2": 13},
+        0: {"contact_nodes_1": 21, "contact_nodes_2": 22},
+    },
 }
 
 # Geometric tolerance for recognising CAD faces, mm (the CAD is exact to
@@ -168,11 +172,13 @@ def _mesh_and_write(gmsh, path: Path, what: str) -> None:
     except Exception as e:  # gmsh raises a bare Exception with its last error
         raise MeshingError(
             f"gmsh could not mesh the {what}: {e} {_last_errors(gmsh)} (try another "
-            f"rig.mesh.size_mm or rig.mesh.contact_size_mm)") from None
+            f"rig.mesh.size_mm or rig.mesh.contact_size_mm)"
+        ) from None
     types, _, _ = gmsh.model.mesh.getElements(3)
     if list(types) != [11]:
-        raise MeshingError(f"gmsh made element types {list(types)} for the {what}, not 10-node "
-                           "tetrahedra only")
+        raise MeshingError(
+            f"gmsh made element types {list(types)} for the {what}, not 10-node tetrahedra only"
+        )
     gmsh.option.setNumber("Mesh.ScalingFactor", 1e-3)  # drawn in mm, written in m
     gmsh.option.setNumber("Mesh.Binary", 1)
     gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
@@ -217,8 +223,11 @@ def build_rig(gmsh: Any, lay: Layout, path: Path) -> None:
     if not all(len(v) == 1 for v in vols.values()):
         raise MeshingError(f"internal: the rig CAD has volumes {vols}, expected one of each")
     members: dict[str, list[int]] = {k: v for k, v in vols.items()}
-    members["clamped"] = [face_containing(gmsh, np.array([0.0, 0.0, 1.0]),
-                                           np.array([[0.0, 0.0, 0.0]]), "the clamped face")]
+    members["clamped"] = [
+        face_containing(
+            gmsh, np.array([0.0, 0.0, 1.0]), np.array([[0.0, 0.0, 0.0]]), "the clamped face"
+        )
+    ]
     point_tags: list[int] = []
     for k in range(2):
         pts = lay.points[lay.side == k]
@@ -230,9 +239,10 @@ def build_rig(gmsh: Any, lay: Layout, path: Path) -> None:
     for name, pts in (("excitation", lay.excitation), ("response", lay.response)):
         members[name] = []
         for k in range(2):
-            face = face_containing(gmsh, np.array([1.0, 0.0, 0.0]), pts[k],
-                                    f"the {name} point of blade {k + 1}")
-            members[name] += embed_points(gmsh, pts[k:k + 1], face)
+            face = face_containing(
+                gmsh, np.array([1.0, 0.0, 0.0]), pts[k], f"the {name} point of blade {k + 1}"
+            )
+            members[name] += embed_points(gmsh, pts[k : k + 1], face)
     _groups(gmsh, "rig", members)
     ms = lay.params.rig.mesh
     h_c = min(ms.contact_size_mm, lay.contact_spacing, ms.size_mm)
@@ -264,15 +274,21 @@ def _rotate_seam_down(gmsh, vol: int, origin: np.ndarray, axis: np.ndarray) -> N
         occ.synchronize()
 
 
-def embed_on_lateral_face(gmsh: Any, lay: Layout, vol: int, origin: np.ndarray,
-                          axis: np.ndarray, lateral_type: str, members: dict[str, list[int]],
-                          point_tags: list[int]) -> None:
+def embed_on_lateral_face(
+    gmsh: Any,
+    lay: Layout,
+    vol: int,
+    origin: np.ndarray,
+    axis: np.ndarray,
+    lateral_type: str,
+    members: dict[str, list[int]],
+    point_tags: list[int],
+) -> None:
     """A solid of revolution just added (``vol``): turn its seam down and embed each side's
     contact points in its one lateral face (gmsh type ``lateral_type``: "Cone", "Cylinder")."""
     gmsh.model.occ.synchronize()
     _rotate_seam_down(gmsh, vol, origin, axis)
-    lateral = [s for _, s in gmsh.model.getEntities(2)
-               if gmsh.model.getType(2, s) == lateral_type]
+    lateral = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getType(2, s) == lateral_type]
     if len(lateral) != 1:
         raise MeshingError(f"internal: the damper has {len(lateral)} {lateral_type} faces")
     for k in range(2):

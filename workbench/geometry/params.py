@@ -63,13 +63,15 @@ class Blade:
     """The two beam-like blades, standing on the base, mirror images about x = 0."""
 
     thickness_mm: float = param(
-        40.0, "extent along x, the bending direction of the first mode, mm", lo=0.0, lo_open=True)
+        40.0, "extent along x, the bending direction of the first mode, mm", lo=0.0, lo_open=True
+    )
     width_mm: float = param(100.0, "extent along y (axial), mm", lo=0.0, lo_open=True)
     height_mm: float = param(
-        313.0, "span along z from the base top to the blade tip, mm", lo=0.0, lo_open=True)
+        313.0, "span along z from the base top to the blade tip, mm", lo=0.0, lo_open=True
+    )
     gap_mm: float = param(
-        40.0, "clear distance between the inner faces of the two blades, mm",
-        lo=0.0, lo_open=True)
+        40.0, "clear distance between the inner faces of the two blades, mm", lo=0.0, lo_open=True
+    )
 
 
 @dataclass(frozen=True)
@@ -77,16 +79,26 @@ class Platform:
     """A platform on each blade; its inclined underside faces the other blade."""
 
     angle_deg: float = param(
-        45.0, "platform angle beta between each inclined contact face and the radial z axis, deg",
-        lo=15.0, hi=75.0)
+        45.0,
+        "platform angle beta between each inclined contact face and the radial z axis, deg",
+        lo=15.0,
+        hi=75.0,
+    )
     overhang_mm: float = param(
-        16.0, "extent from the blade's inner face toward the other blade, along x, mm",
-        lo=0.0, lo_open=True)
+        16.0,
+        "extent from the blade's inner face toward the other blade, along x, mm",
+        lo=0.0,
+        lo_open=True,
+    )
     tip_thickness_mm: float = param(
-        6.0, "height of the platform's vertical tip face (above the inclined face), mm",
-        lo=0.0, lo_open=True)
+        6.0,
+        "height of the platform's vertical tip face (above the inclined face), mm",
+        lo=0.0,
+        lo_open=True,
+    )
     top_below_tip_mm: float = param(
-        221.0, "distance from the blade tip down to the platform's top face, mm", lo=0.0)
+        221.0, "distance from the blade tip down to the platform's top face, mm", lo=0.0
+    )
     width_mm: float = param(100.0, "extent along y, centred on the blade, mm", lo=0.0, lo_open=True)
 
 
@@ -117,15 +129,21 @@ MAX_SIZE_MM = 1000.0  # a mesh size beyond the rig's own size (~300 mm) means no
 class MeshSizes:
     """Target element sizes (gmsh) of the second-order tetrahedral meshes."""
 
-    size_mm: float = param(9.0, "global element size of the rig, mm", lo=0.0, lo_open=True,
-                           hi=MAX_SIZE_MM)
+    size_mm: float = param(
+        9.0, "global element size of the rig, mm", lo=0.0, lo_open=True, hi=MAX_SIZE_MM
+    )
     contact_size_mm: float = param(
-        1.5, "element size at the contact points (rig and damper), mm", lo=0.0, lo_open=True)
+        1.5, "element size at the contact points (rig and damper), mm", lo=0.0, lo_open=True
+    )
     refine_distance_mm: float = param(
-        12.0, "distance from the contact points over which the size grows back, mm",
-        lo=0.0, lo_open=True)
+        12.0,
+        "distance from the contact points over which the size grows back, mm",
+        lo=0.0,
+        lo_open=True,
+    )
     damper_size_mm: float = param(
-        3.0, "global element size of the damper, mm", lo=0.0, lo_open=True)
+        3.0, "global element size of the damper, mm", lo=0.0, lo_open=True
+    )
 
 
 @dataclass(frozen=True)
@@ -137,14 +155,19 @@ class Fit:
     """
 
     edge_margin_mm: float = param(
-        1.0, "smallest distance from a contact line or face to the edge of a platform face, mm",
-        lo=0.1)
+        1.0,
+        "smallest distance from a contact line or face to the edge of a platform face, mm",
+        lo=0.1,
+    )
     clearance_mm: float = param(
-        1.0, "smallest gap between the damper and any rig part it must not touch, "
-        "and between the two platform tips, mm", lo=0.1)
+        1.0,
+        "smallest gap between the damper and any rig part it must not touch, "
+        "and between the two platform tips, mm",
+        lo=0.1,
+    )
     min_feature_mm: float = param(
-        0.5, "smallest step between faces (a step is either absent or at least this), mm",
-        lo=0.1)
+        0.5, "smallest step between faces (a step is either absent or at least this), mm", lo=0.1
+    )
 
 
 @dataclass(frozen=True)
@@ -213,9 +236,11 @@ def _check_tables(data: Mapping[str, Any], source: str) -> None:
     for key, value in data.items():
         if key not in allowed:
             raise InputError(
-                f"[{key}] in {source}", "a table",
+                f"[{key}] in {source}",
+                "a table",
                 "the tables " + ", ".join(f"[{a}]" for a in allowed),
-                ("unknown table; " + did_you_mean(key, allowed)).rstrip("; "))
+                ("unknown table; " + did_you_mean(key, allowed)).rstrip("; "),
+            )
         if not isinstance(value, Mapping):
             raise InputError(f"{source}: {key}", value, f"a table [{key}]")
 

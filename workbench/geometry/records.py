@@ -133,8 +133,10 @@ class BuiltGeometry:
         with h5py.File(path, "r") as h:
             a = h.attrs
             contact = ContactSet(
-                points=h["contact/points"][()], frames=h["contact/frames"][()],
-                side=h["contact/side"][()], weight=h["contact/weight"][()],
+                points=h["contact/points"][()],
+                frames=h["contact/frames"][()],
+                side=h["contact/side"][()],
+                weight=h["contact/weight"][()],
                 kind=str(a["contact_kind"]),
             )
             return cls(

@@ -26,8 +26,11 @@ def check_step(param: str, value: float, step: float, f: float, what: str) -> No
     """A step between faces is absent (below SAME_MM) or at least ``f``; else InputError."""
     if SAME_MM <= abs(step) < f:
         raise fit_error(
-            param, value, f"a value that leaves no step or a step of at least "
-            f"rig.fit.min_feature_mm = {f:g} mm", f"{what} would be {abs(step):.3g} mm")
+            param,
+            value,
+            f"a value that leaves no step or a step of at least rig.fit.min_feature_mm = {f:g} mm",
+            f"{what} would be {abs(step):.3g} mm",
+        )
 
 
 def voronoi_1d(x: np.ndarray, lo: float, hi: float) -> np.ndarray:

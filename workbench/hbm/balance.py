@@ -67,8 +67,16 @@ from .ports import excitation_vector, observation
 from .system import System
 
 # observation, excitation_vector (ports.py) and the loop work (loops.py) stay importable here
-__all__ = ["Evaluation", "HarmonicBalance", "HillParts", "PointData", "excitation_vector",
-           "loop_dissipation", "loop_normal_work", "observation"]
+__all__ = [
+    "Evaluation",
+    "HarmonicBalance",
+    "HillParts",
+    "PointData",
+    "excitation_vector",
+    "loop_dissipation",
+    "loop_normal_work",
+    "observation",
+]
 
 
 @dataclass
@@ -587,5 +595,3 @@ class HarmonicBalance:
             return np.concatenate([z1.ravel(), b1.ravel()])
 
         return 2 * nh * nz, op
-
-

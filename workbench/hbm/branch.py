@@ -117,7 +117,7 @@ class Branch:
         return self.stability < 0
 
     def stability_name(self, i: int) -> str:
-        """"stable", "unstable" or "unknown" at point ``i``."""
+        """ "stable", "unstable" or "unknown" at point ``i``."""
         return ("unknown", "unstable", "stable")[int(self.stability[i]) + 1]
 
     @property

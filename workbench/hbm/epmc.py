@@ -53,7 +53,8 @@ class Epmc:
         if lam.min() <= 1e-12 * max(abs(lam).max(), 1e-300):
             raise SolveError(
                 "the linear system with every contact stuck is singular: a rigid-body mode is "
-                "held by no support and no contact element")
+                "held by no support and no contact element"
+            )
         self.wn = np.sqrt(lam)
         self.phi_all = phi
         self.c_all = np.einsum("ij,ik,kj->j", phi, self.C, phi)  # 2 zeta w (diagonal part)
@@ -88,8 +89,14 @@ class Epmc:
         self.c1 = fourier.index(1, "c")
         # sparse pattern of the contact Jacobian (rows (h, e, a), cols (c, e, b))
         if self.n_el:
-            e, a, h, b, c = np.meshgrid(np.arange(self.n_el), np.arange(3), np.arange(nh),
-                                        np.arange(3), np.arange(nh), indexing="ij")
+            e, a, h, b, c = np.meshgrid(
+                np.arange(self.n_el),
+                np.arange(3),
+                np.arange(nh),
+                np.arange(3),
+                np.arange(nh),
+                indexing="ij",
+            )
             self._drow = (h * self.n3 + 3 * e + a).ravel()
             self._dcol = (c * self.n3 + 3 * e + b).ravel()
         self._lin_cache: tuple | None = None
@@ -117,8 +124,9 @@ class Epmc:
             if f.has_dc:
                 for a in range(2):
                     J[:, a, 0, a, 0] += self.anchor[:, a]
-            D = sp.csr_matrix((J.ravel(), (self._drow, self._dcol)),
-                              shape=(f.nh * self.n3, f.nh * self.n3))
+            D = sp.csr_matrix(
+                (J.ravel(), (self._drow, self._dcol)), shape=(f.nh * self.n3, f.nh * self.n3)
+            )
         self.stats["t_aft"] += time.perf_counter() - t0
         return G.reshape(f.nh, self.n3), D, res
 
@@ -147,8 +155,9 @@ class Epmc:
         if f.has_dc:
             for a in range(2):
                 J[:, a, 0, a, 0] += self.anchor[:, a]
-        return sp.csr_matrix((J.ravel(), (self._drow, self._dcol)),
-                             shape=(f.nh * self.n3, f.nh * self.n3))
+        return sp.csr_matrix(
+            (J.ravel(), (self._drow, self._dcol)), shape=(f.nh * self.n3, f.nh * self.n3)
+        )
 
     def _linear(self, P: np.ndarray, w: float, xi: float) -> np.ndarray:
         """The linear part on harmonics P (nh, n): K_r P0; A Pc + B Ps; A Ps - B Pc."""
@@ -213,9 +222,9 @@ class Epmc:
             J[:N, :N] += (self.Wh.T @ D @ self.Wh).toarray()
         J[:N, N] = dw.ravel()
         J[:N, N + 1] = dxi.ravel()
-        J[N, c * n:(c + 1) * n] = 2 * (self.M @ psi[c])
-        J[N, (c + 1) * n:(c + 2) * n] = 2 * (self.M @ psi[c + 1])
-        J[N + 1, (c + 1) * n:(c + 2) * n] = self.Mphi
+        J[N, c * n : (c + 1) * n] = 2 * (self.M @ psi[c])
+        J[N, (c + 1) * n : (c + 2) * n] = 2 * (self.M @ psi[c + 1])
+        J[N + 1, (c + 1) * n : (c + 2) * n] = self.Mphi
         return r, res, J
 
     # hooks shared with the condensed form (the corrector and the loop see only these)
@@ -226,7 +235,7 @@ class Epmc:
     def var_scale(self) -> np.ndarray:
         """Scale of each unknown (psi as it is; w and xi by the linear frequency)."""
         sc = np.ones(self.N + 2)
-        sc[self.N:] = self.w_lin
+        sc[self.N :] = self.w_lin
         return sc
 
     def row_scale(self) -> np.ndarray:
@@ -247,7 +256,7 @@ class Epmc:
     def linear_guess(self) -> np.ndarray:
         """``y`` of the linear mode with every contact stuck (exact as ``a -> 0``)."""
         y = np.zeros(self.N + 2)
-        y[self.c1 * self.n:(self.c1 + 1) * self.n] = self.phi
+        y[self.c1 * self.n : (self.c1 + 1) * self.n] = self.phi
         y[self.N] = self.w_lin
         y[self.N + 1] = self.xi_lin
         return y
@@ -276,6 +285,7 @@ class Epmc:
         G, _, res = self.contact(Q, want_jac=False)
         nabla = f.nabla(w)
         V = nabla @ Q  # velocity harmonics
+
         # energy fed by -xi M q' and taken by C q' per cycle: pi/w * sum over harmonics
         def quad(A: np.ndarray) -> float:
             tot = 0.0
@@ -300,26 +310,47 @@ class Epmc:
         c = self.c1
         p1 = psi[c] - 1j * psi[c + 1]
         ref = p1 if phi1_ref is None else phi1_ref
-        mac = float(abs(np.conj(ref) @ self.M @ p1) ** 2
-                    / (np.real(np.conj(ref) @ self.M @ ref) * np.real(np.conj(p1) @ self.M @ p1)))
-        ke = [float(psi[c_] @ self.M @ psi[c_] + psi[s] @ self.M @ psi[s]) * k * k
-              for k, c_, s in f.pairs()]
+        mac = float(
+            abs(np.conj(ref) @ self.M @ p1) ** 2
+            / (np.real(np.conj(ref) @ self.M @ ref) * np.real(np.conj(p1) @ self.M @ p1))
+        )
+        ke = [
+            float(psi[c_] @ self.M @ psi[c_] + psi[s] @ self.M @ psi[s]) * k * k
+            for k, c_, s in f.pairs()
+        ]
         hk = [k for k, _, _ in f.pairs()]
         total = sum(ke)
         higher = (total - ke[hk.index(1)]) / total if total > 0 else 0.0
         Y = Q @ self.O.T
         return dict(
-            amplitude=a, freq_hz=w / TWO_PI, xi=xi, damping_ratio=xi / (2 * w),
+            amplitude=a,
+            freq_hz=w / TWO_PI,
+            xi=xi,
+            damping_ratio=xi / (2 * w),
             xi_viscous=float(np.real(np.conj(p1) @ self.C @ p1)),
-            friction_energy=fric, status=status, energy_residual=e_res, work_friction=w_fric,
-            work_viscous=w_visc, mac=mac, higher_harmonics=higher,
-            out_amp=f.amplitude(Y), out_h1=f.h1_amplitude(Y), psi=y[: self.N].copy(),
-            lost=self.lost_contact(res), phi1=p1,
+            friction_energy=fric,
+            status=status,
+            energy_residual=e_res,
+            work_friction=w_fric,
+            work_viscous=w_visc,
+            mac=mac,
+            higher_harmonics=higher,
+            out_amp=f.amplitude(Y),
+            out_h1=f.h1_amplitude(Y),
+            psi=y[: self.N].copy(),
+            lost=self.lost_contact(res),
+            phi1=p1,
         )
 
 
-def make_problem(system: System, fourier: Fourier, mode: int, outputs: object = None,
-                 dc_anchor: float = 1e-3, space: str = "auto"):
+def make_problem(
+    system: System,
+    fourier: Fourier,
+    mode: int,
+    outputs: object = None,
+    dc_anchor: float = 1e-3,
+    space: str = "auto",
+):
     """:class:`EpmcCondensed` when the damping is modal and the contacts see fewer
     coordinates than the model has ("auto"), else :class:`Epmc` (all DOFs)."""
     from ..errors import check_choice

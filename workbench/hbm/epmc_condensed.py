@@ -37,8 +37,14 @@ class EpmcCondensed:
     DOF: the size is ``nh (n_s + 1)`` instead of ``nh n``.
     """
 
-    def __init__(self, system: System, fourier: Fourier, mode: int, outputs: object = None,
-                 dc_anchor: float = 1e-3):
+    def __init__(
+        self,
+        system: System,
+        fourier: Fourier,
+        mode: int,
+        outputs: object = None,
+        dc_anchor: float = 1e-3,
+    ):
         self.phys = Epmc(system, fourier, mode, outputs, dc_anchor)
         ph = self.phys
         self.system, self.fourier = system, fourier
@@ -79,7 +85,7 @@ class EpmcCondensed:
 
     def var_scale(self) -> np.ndarray:
         sc = np.ones(self.N + 2)
-        sc[self.N:] = self.w_lin
+        sc[self.N :] = self.w_lin
         return sc
 
     def row_scale(self) -> np.ndarray:
@@ -95,7 +101,7 @@ class EpmcCondensed:
     def _split(self, y: np.ndarray):
         X = y[: self.Ns].reshape(self.nh, self.n_s)
         eta = np.zeros(self.nh)
-        eta[self.keep_eta] = y[self.Ns: self.N]
+        eta[self.keep_eta] = y[self.Ns : self.N]
         eta[self.c1] = 1.0
         return X, eta, float(y[self.N]), float(y[self.N + 1])
 
@@ -178,7 +184,7 @@ class EpmcCondensed:
         J[np.arange(Ns), np.arange(Ns)] += 1.0
         # dr_u/deta = -b_j in each component
         for q, h in enumerate(self.keep_eta):
-            J[h * n_s:(h + 1) * n_s, Ns + q] = -self.bj
+            J[h * n_s : (h + 1) * n_s, Ns + q] = -self.bj
         # d/dw, d/dxi of r_u through H'
         J[:Ns, N] = -(self._apply(dd_w, Fm) @ self.Bs.T).ravel()
         J[:Ns, N + 1] = -(self._apply(dd_xi, Fm) @ self.Bs.T).ravel()
@@ -204,7 +210,7 @@ class EpmcCondensed:
         Je[:, Ns:N] = Ee[:, self.keep_eta]
         Je[:, N] = dw
         Je[:, N + 1] = dxi
-        J[Ns:N + 2] = Je / w2
+        J[Ns : N + 2] = Je / w2
         return r, res, J
 
     def _dact(self, D) -> sp.csr_matrix:

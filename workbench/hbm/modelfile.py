@@ -232,13 +232,17 @@ def _read_model_matrices(m: ModelSection, path: Path):
             f = (path.parent / fname).resolve()
             if not f.is_file():
                 raise InputError(
-                    f"model.{role}", spec,
+                    f"model.{role}",
+                    spec,
                     "a matrix file (model.matrices is empty), looked in " + str(path.parent),
                 )
             specs[role] = f"{f}{hash_}{name}"
         if m.static_force:
-            raise InputError("model.static_force", m.static_force,
-                             "empty when model.matrices is empty (a vector needs a .npz/.h5)")
+            raise InputError(
+                "model.static_force",
+                m.static_force,
+                "empty when model.matrices is empty (a vector needs a .npz/.h5)",
+            )
         ms = readers.read_matrices(specs, dof_map)
         M, K = ms.matrices["mass"], ms.matrices["stiffness"]
         return M, K, ms.matrices.get("damping"), None, ms
@@ -249,8 +253,11 @@ def _read_model_matrices(m: ModelSection, path: Path):
         )
     if readers.file_kind(mfile) != "numpy":
         if m.static_force:
-            raise InputError("model.static_force", m.static_force,
-                             "empty for an FE export (a vector needs a .npz/.h5)")
+            raise InputError(
+                "model.static_force",
+                m.static_force,
+                "empty for an FE export (a vector needs a .npz/.h5)",
+            )
         ms = readers.read_matrices({r: f"{mfile}#{v}" for r, v in roles.items()}, dof_map)
         M, K = ms.matrices["mass"], ms.matrices["stiffness"]
         return M, K, ms.matrices.get("damping"), None, ms
@@ -263,8 +270,9 @@ def _read_model_matrices(m: ModelSection, path: Path):
         fs = np.asarray(_matrix(arrays, m.static_force, "model.static_force", mfile), float).ravel()
     labels = readers.read_dof_map(dof_map) if dof_map else None
     if labels is not None and len(labels) != M.shape[0]:
-        raise InputError("model.dof_map", m.dof_map, f"{M.shape[0]} rows (one per DOF)",
-                         f"it has {len(labels)}")
+        raise InputError(
+            "model.dof_map", m.dof_map, f"{M.shape[0]} rows (one per DOF)", f"it has {len(labels)}"
+        )
     ms = readers.MatrixSet({"mass": M}, labels, mfile.name)
     return M, K, C, fs, ms
 
@@ -297,8 +305,11 @@ def _contact_by_node(g: ContactSection, ms, where: str) -> ContactSection:
         raise InputError(f"{where}.components", comps, "1 to 3 components for t1, t2, n")
     comps = [-1 if c == -1 else component_number(c, f"{where}.components") for c in comps]
     if g.other_nodes and len(g.other_nodes) != len(g.nodes):
-        raise InputError(f"{where}.other_nodes", g.other_nodes,
-                         f"{len(g.nodes)} node ids (one per element) or empty")
+        raise InputError(
+            f"{where}.other_nodes",
+            g.other_nodes,
+            f"{len(g.nodes)} node ids (one per element) or empty",
+        )
 
     def row(node, k):
         return [-1 if c == -1 else ms.index(node, c, f"{where}.{k}") for c in comps]

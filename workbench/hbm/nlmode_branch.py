@@ -121,8 +121,13 @@ class NlModeBranch:
     def summary(self) -> dict[str, Any]:
         """The numbers the CLI prints for this backbone."""
         if not self.n_points:
-            return dict(mode=self.mode, n_points=0, completed=self.completed,
-                        failed=self.failed, message=self.message)
+            return dict(
+                mode=self.mode,
+                n_points=0,
+                completed=self.completed,
+                failed=self.failed,
+                message=self.message,
+            )
         i = int(np.argmax(self.damping_ratio))
         return dict(
             mode=self.mode,
@@ -158,8 +163,16 @@ class NlModeBranch:
             for name in ("linear_hz", "lin_phi", "lin_c", "obs"):
                 h.create_dataset(name, data=getattr(self, name))
             a = h.attrs
-            for name in ("mode", "f_stuck_hz", "nt", "n", "completed", "failed", "message",
-                         "label"):
+            for name in (
+                "mode",
+                "f_stuck_hz",
+                "nt",
+                "n",
+                "completed",
+                "failed",
+                "message",
+                "label",
+            ):
                 a[name] = getattr(self, name)
             a["harmonics"] = np.asarray(self.harmonics, dtype=int)
             a["output_names"] = json.dumps(list(self.output_names))
@@ -174,15 +187,21 @@ class NlModeBranch:
             kw = {name: h[name][()] for name in POINT_ARRAYS}
             a = h.attrs
             return cls(
-                mode=int(a["mode"]), f_stuck_hz=float(a["f_stuck_hz"]),
+                mode=int(a["mode"]),
+                f_stuck_hz=float(a["f_stuck_hz"]),
                 linear_hz=h["linear_hz"][()],
                 **{k: h[k][()] for k in ("lin_phi", "lin_c", "obs") if k in h},
                 harmonics=tuple(int(v) for v in a["harmonics"]),
-                nt=int(a["nt"]), n=int(a["n"]),
+                nt=int(a["nt"]),
+                n=int(a["n"]),
                 output_names=tuple(json.loads(a["output_names"])),
-                completed=bool(a["completed"]), failed=bool(a["failed"]),
-                message=str(a["message"]), label=str(a["label"]),
-                timings=json.loads(a["timings"]), **kw)
+                completed=bool(a["completed"]),
+                failed=bool(a["failed"]),
+                message=str(a["message"]),
+                label=str(a["label"]),
+                timings=json.loads(a["timings"]),
+                **kw,
+            )
 
     def to_csv(self, path: str | Path, unit: str = "m") -> Path:
         """One row per point: amplitude, frequency, damping, energy, status counts, outputs."""

@@ -63,8 +63,16 @@ from .system import System
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Epmc", "EpmcCondensed", "NlModeBranch", "linear_modes", "make_problem",
-           "nonlinear_mode", "pick_mode", "slip_amplitude"]
+__all__ = [
+    "Epmc",
+    "EpmcCondensed",
+    "NlModeBranch",
+    "linear_modes",
+    "make_problem",
+    "nonlinear_mode",
+    "pick_mode",
+    "slip_amplitude",
+]
 
 
 # -- the corrector: PETSc SNES with the dense analytic Jacobian ------------------------
@@ -77,8 +85,9 @@ class _Snes:
     step (which passes a fold of the backbone in amplitude).
     """
 
-    def __init__(self, prob: Epmc, tol: float, tol_stall: float, max_it: int,
-                 line_search: str = "bt"):
+    def __init__(
+        self, prob: Epmc, tol: float, tol_stall: float, max_it: int, line_search: str = "bt"
+    ):
         from petsc4py import PETSc
 
         self.prob = prob
@@ -167,8 +176,9 @@ class _Snes:
     def unscaled(self, Y: np.ndarray) -> tuple[np.ndarray, float]:
         return Y[:-1] * self.s, float(Y[-1])
 
-    def solve(self, Y0: np.ndarray, c: np.ndarray | None = None,
-              Yp: np.ndarray | None = None) -> tuple[np.ndarray, bool, int]:
+    def solve(
+        self, Y0: np.ndarray, c: np.ndarray | None = None, Yp: np.ndarray | None = None
+    ) -> tuple[np.ndarray, bool, int]:
         """From ``Y0`` with the constraint ``c . (Y - Yp) = 0`` (default: ``s = Y0[-1]``)."""
         if c is None:
             self.c = np.zeros(self.n)
@@ -322,17 +332,26 @@ def nonlinear_mode(
         if phi1_ref is None:
             phi1_ref = pt["phi1"]
         if pt["lost"]:
-            raise _Stop(f"the damper has lost contact at modal amplitude {a:.4g}: a singular "
-                        "state; the backbone ends here", False)
+            raise _Stop(
+                f"the damper has lost contact at modal amplitude {a:.4g}: a singular "
+                "state; the backbone ends here",
+                False,
+            )
         for k in POINT_ARRAYS:
             if k != "newton_its":
                 rows[k].append(pt[k])
         rows["newton_its"].append(its)
         ys.append(y_unknowns)
-        if f_top > 0 and a * pt["xi"] * TWO_PI * pt["freq_hz"] > 2.0 * f_top * abs(
-                np.conj(pt["phi1"]) @ f1v) and np.any(pt["status"] > 0):
-            raise _Stop(f"covers the largest level ({f_top:g}): its peak is below modal "
-                        f"amplitude {a:.4g}", False, completed=True)
+        if (
+            f_top > 0
+            and a * pt["xi"] * TWO_PI * pt["freq_hz"] > 2.0 * f_top * abs(np.conj(pt["phi1"]) @ f1v)
+            and np.any(pt["status"] > 0)
+        ):
+            raise _Stop(
+                f"covers the largest level ({f_top:g}): its peak is below modal amplitude {a:.4g}",
+                False,
+                completed=True,
+            )
         return pt
 
     from ..log import progress_bar
@@ -394,8 +413,11 @@ def nonlinear_mode(
                     change = max(abs(w1 - w0) / w0, abs(d1 - d0) / max(abs(d0), 1e-3))
                     step = Yn - Y
                     cosang = float(np.sum(mw**2 * step * t)) / max(norm(step), 1e-300)
-                    if (change > max_change or (arc and cosang < cos_max)) \
-                            and ds > 2 * ds_min and turns < 4:
+                    if (
+                        (change > max_change or (arc and cosang < cos_max))
+                        and ds > 2 * ds_min
+                        and turns < 4
+                    ):
                         ok = False
                         turns += 1
                     elif cosang < 0.0 and Y_prev is not None:
@@ -411,7 +433,9 @@ def nonlinear_mode(
                         raise _Stop(
                             f"the corrector failed after modal amplitude "
                             f"{np.exp(Y[-1]):.4g} even with the smallest step; the backbone "
-                            "so far is kept", True)
+                            "so far is kept",
+                            True,
+                        )
                     continue
                 turns = 0
                 if Yn[-1] >= s1:  # the last point exactly at the largest amplitude
@@ -431,7 +455,9 @@ def nonlinear_mode(
                             f"the backbone folds back in amplitude after {np.exp(s_top):.4g} "
                             "and does not turn again within a factor 2 (the mode changes "
                             "character, or the free damper's mean position does): it ends "
-                            "here", False)
+                            "here",
+                            False,
+                        )
                 if Yn[-1] > s_top:
                     s_top, since_top = float(Yn[-1]), 0
                 else:
@@ -441,13 +467,16 @@ def nonlinear_mode(
                             f"the backbone folds back in amplitude after {np.exp(s_top):.4g} "
                             f"and has not passed it again in {max_fold_points} points (the "
                             "mode changes character, or the free damper's mean position "
-                            "does): it ends here", False)
+                            "does): it ends here",
+                            False,
+                        )
                 Y_prev, Y = Y, Yn
                 hist.append(Y)
                 prev = record(snes.unscaled(Y)[0], float(np.exp(Y[-1])), its)
                 bar.n = round(min(max(Y[-1] - s0, 0.0), span), 6)
-                bar.set_postfix_str(f"{prev['freq_hz']:.4g} Hz, D {prev['damping_ratio']:.3g}",
-                                    refresh=False)
+                bar.set_postfix_str(
+                    f"{prev['freq_hz']:.4g} Hz, D {prev['damping_ratio']:.3g}", refresh=False
+                )
                 bar.update(0)
                 grow = 1.5 if its <= 4 else (0.7 if its > 8 else 1.0)
                 ds = float(np.clip(ds * grow, ds_min, ds_max))
@@ -464,26 +493,41 @@ def nonlinear_mode(
 
     def branch() -> NlModeBranch:
         arr: dict[str, np.ndarray] = {}
-        shapes = dict(friction_energy=(0, n_el), status=(0, n_el), out_amp=(0, O.shape[0]),
-                      out_h1=(0, O.shape[0]), psi=(0, fourier.nh * system.n))
+        shapes = dict(
+            friction_energy=(0, n_el),
+            status=(0, n_el),
+            out_amp=(0, O.shape[0]),
+            out_h1=(0, O.shape[0]),
+            psi=(0, fourier.nh * system.n),
+        )
         for k, v in rows.items():
             arr[k] = np.array(v) if v else np.zeros(shapes.get(k, (0,)))
         arr["status"] = arr["status"].astype(np.int8)
         arr["newton_its"] = arr["newton_its"].astype(int)
         timings = dict(total=time.perf_counter() - t_start, aft=prob.stats["t_aft"])
         return NlModeBranch(
-            mode=mode, f_stuck_hz=prob.w_lin / TWO_PI, linear_hz=prob.wn / TWO_PI,
-            harmonics=fourier.harmonics, nt=fourier.nt, n=system.n, output_names=names,
-            completed=completed, failed=failed,
+            mode=mode,
+            f_stuck_hz=prob.w_lin / TWO_PI,
+            linear_hz=prob.wn / TWO_PI,
+            harmonics=fourier.harmonics,
+            nt=fourier.nt,
+            n=system.n,
+            output_names=names,
+            completed=completed,
+            failed=failed,
             message=message or ("reached the largest amplitude" if completed else ""),
-            timings=timings, label=label, lin_phi=prob_phys.phi_all, lin_c=prob_phys.c_all,
-            obs=O, **arr)
+            timings=timings,
+            label=label,
+            lin_phi=prob_phys.phi_all,
+            lin_c=prob_phys.c_all,
+            obs=O,
+            **arr,
+        )
 
     try:
         if f_top > 0 and len(ys) >= 2:
             _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, refine_ratio)
-    except (_Stop, np.linalg.LinAlgError, FloatingPointError, ArithmeticError,
-            RuntimeError) as e:
+    except (_Stop, np.linalg.LinAlgError, FloatingPointError, ArithmeticError, RuntimeError) as e:
         log.info("refinement at the peaks stopped: %s", e)
     finally:
         snes.destroy()

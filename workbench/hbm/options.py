@@ -101,9 +101,7 @@ class SolverOptions:
     )
     # stability
     stability: bool = param(True, "Hill's method at every point")
-    n_floquet: int = param(
-        6, "Floquet exponents ARPACK starts with (large systems)", lo=1, hi=200
-    )
+    n_floquet: int = param(6, "Floquet exponents ARPACK starts with (large systems)", lo=1, hi=200)
     n_floquet_max: int = param(
         48,
         "Floquet exponents ARPACK may grow to while covering |lambda| <= w/2 (else unknown)",

@@ -195,8 +195,11 @@ def runup(
         p0 = 0
     else:
         if start.get("law") != law.name or np.shape(start["q"]) != (n,):
-            raise InputError("start", "a RunUp state",
-                             f"the end state of a run-up of this model ({law.name} law, {n} DOFs)")
+            raise InputError(
+                "start",
+                "a RunUp state",
+                f"the end state of a run-up of this model ({law.name} law, {n} DOFs)",
+            )
         q, v, a = (np.array(start[k], dtype=float) for k in ("q", "v", "a"))
         state = np.array(start["s"], dtype=float)
         p0 = int(start["periods"])
@@ -219,7 +222,9 @@ def runup(
             res = _record(freq, level, ys, ns_, sl, sp_, el.n0, q, v, a, state, law, p0 + done)
             raise SolveError(
                 f"run-up at {freq:.6g} Hz: Newton did not converge in period {p0 + done + 1}; "
-                "the step is rejected (more steps_per_period may help)", partial=res)
+                "the step is rejected (more steps_per_period may help)",
+                partial=res,
+            )
         if progress is not None:
             progress(done, periods)
     return _record(freq, level, ys, ns_, sl, sp_, el.n0, q, v, a, state, law, p0 + done)
@@ -231,10 +236,14 @@ def _record(freq, level, ys, ns_, sl, sp_, n0, q, v, a, state, law, periods) -> 
     t = 2.0 * np.pi * np.arange(1, spp + 1) / spp
     h1 = np.abs(np.einsum("psk,s->pk", y, np.exp(-1j * t))) * 2.0 / max(spp, 1)
     return RunUp(
-        freq_hz=freq, level=level, mean=y.mean(axis=1), h1=h1,
+        freq_hz=freq,
+        level=level,
+        mean=y.mean(axis=1),
+        h1=h1,
         normal_ratio=np.concatenate(ns_) / n0[None, :] if ns_ else np.zeros((0, n0.size)),
         slip_samples=np.concatenate(sl) if sl else np.zeros(0, int),
         sep_samples=np.concatenate(sp_) if sp_ else np.zeros(0, int),
-        state=dict(q=q.copy(), v=v.copy(), a=a.copy(), s=state.copy(), law=law.name,
-                   periods=periods),
+        state=dict(
+            q=q.copy(), v=v.copy(), a=a.copy(), s=state.copy(), law=law.name, periods=periods
+        ),
     )

@@ -263,8 +263,14 @@ def hill_arpack(
             P = vec[: nh * n][:, nz].reshape(nh, n, -1) if vec.size else np.zeros((nh, n, 0))
             keep = lam[_centred(P, harmonics)]
             return _verdict(
-                keep, omega, tol, False, "ARPACK did not converge", method="arpack",
-                converged=False, count_ok=False,
+                keep,
+                omega,
+                tol,
+                False,
+                "ARPACK did not converge",
+                method="arpack",
+                converged=False,
+                count_ok=False,
             )
         nz = np.abs(mu) > 0
         lam = 1.0 / mu[nz]

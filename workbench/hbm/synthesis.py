@@ -61,11 +61,16 @@ class Synthesis:
     checks: dict[str, float] = field(default_factory=dict)
 
     def summary(self) -> dict[str, Any]:
-        return dict(level=self.level, peak_frequency_hz=self.peak_freq_hz,
-                    peak_amplitude=self.peak_amplitude,
-                    peak_modal_amplitude=self.peak_modal_amplitude, peak_h1=self.peak_h1,
-                    valid=self.valid,
-                    reasons=list(self.reasons), checks=dict(self.checks))
+        return dict(
+            level=self.level,
+            peak_frequency_hz=self.peak_freq_hz,
+            peak_amplitude=self.peak_amplitude,
+            peak_modal_amplitude=self.peak_modal_amplitude,
+            peak_h1=self.peak_h1,
+            valid=self.valid,
+            reasons=list(self.reasons),
+            checks=dict(self.checks),
+        )
 
 
 def _least_stiffness(w: np.ndarray, xi: np.ndarray, c: np.ndarray):
@@ -118,8 +123,15 @@ def synthesize(
     lo_f = np.full(a.size, np.nan)
     hi_f = np.full(a.size, np.nan)
     for i in range(a.size):
-        r = np.roots([1.0, 0.0, c[i] ** 2 - 2 * w[i] ** 2, 2 * c[i] * (xi[i] - c[i]) * w[i],
-                      w[i] ** 4 + (xi[i] - c[i]) ** 2 * w[i] ** 2 - F[i] ** 2 / a[i] ** 2])
+        r = np.roots(
+            [
+                1.0,
+                0.0,
+                c[i] ** 2 - 2 * w[i] ** 2,
+                2 * c[i] * (xi[i] - c[i]) * w[i],
+                w[i] ** 4 + (xi[i] - c[i]) ** 2 * w[i] ** 2 - F[i] ** 2 / a[i] ** 2,
+            ]
+        )
         r = np.sort(r[(np.abs(r.imag) <= 1e-9 * w[i]) & (r.real > 0)].real)
         if r.size >= 2:
             lo_f[i], hi_f[i] = r[0], r[-1]
@@ -186,8 +198,10 @@ def synthesize(
 
         def gt(t: float) -> float:
             ww, xx, cc, ff, aa = model(t)
-            return float(aa * np.sqrt(_least_stiffness(np.array([ww]), np.array([xx]),
-                                                       np.array([cc]))[1][0]) - ff)
+            return float(
+                aa * np.sqrt(_least_stiffness(np.array([ww]), np.array([xx]), np.array([cc]))[1][0])
+                - ff
+            )
 
         lo_t, hi_t = 0.0, 1.0
         if gt(lo_t) < 0 <= gt(hi_t):
@@ -213,9 +227,11 @@ def synthesize(
     if band_hz is not None:
         keep = (curve_f >= band_hz[0]) & (curve_f <= band_hz[1])
         curve_f, curve_y = curve_f[keep], curve_y[keep]
-    if np.any(np.diff(a[: j + 1]) < -1e-9 * a[: j].max(initial=0.0)):
-        reasons.append("the backbone folds back in amplitude below the peak (the mode "
-                       "changes character: modal interaction)")
+    if np.any(np.diff(a[: j + 1]) < -1e-9 * a[:j].max(initial=0.0)):
+        reasons.append(
+            "the backbone folds back in amplitude below the peak (the mode "
+            "changes character: modal interaction)"
+        )
     # validity at the peak
     mac = at(nm.mac)
     hh = float(np.max(nm.higher_harmonics[: j + 1]))
@@ -223,29 +239,46 @@ def synthesize(
     others = np.delete(nm.linear_hz, nm.mode)
     gap = float(np.min(np.abs(others - f_pk)) / f_pk) if others.size else np.inf
     if mac < mac_min:
-        reasons.append(f"the mode shape changes with amplitude (MAC {mac:.3f} < {mac_min:g} "
-                       "against the low-amplitude shape)")
+        reasons.append(
+            f"the mode shape changes with amplitude (MAC {mac:.3f} < {mac_min:g} "
+            "against the low-amplitude shape)"
+        )
     if gap < separation:
-        reasons.append(f"another linear mode lies within {100 * gap:.1f} % of the peak "
-                       "frequency (modal interaction)")
+        reasons.append(
+            f"another linear mode lies within {100 * gap:.1f} % of the peak "
+            "frequency (modal interaction)"
+        )
     if hh > higher_max:
-        reasons.append(f"higher harmonics carry {100 * hh:.0f} % of the motion (internal "
-                       "resonance?)")
+        reasons.append(
+            f"higher harmonics carry {100 * hh:.0f} % of the motion (internal resonance?)"
+        )
     others = nm.other_modes_response(np.asarray(f1, complex), f_pk)
     share = float(np.abs(others[output]) * level / y_pk) if y_pk > 0 and others.size else 0.0
     if share > others_max:
-        reasons.append(f"the other modes add {100 * share:.1f} % of the peak amplitude (their "
-                       "stuck linear response there): the forced motion is not the mode alone")
+        reasons.append(
+            f"the other modes add {100 * share:.1f} % of the peak amplitude (their "
+            "stuck linear response there): the forced motion is not the mode alone"
+        )
     if d_pk > damping_max:
         reasons.append(f"damping ratio {d_pk:.3f} > {damping_max:g} at the peak")
     # a second crossing further up: the full curve may have an isola or a jump there
-    if hit.size and np.any(g[hit[0]:] < 0):
-        reasons.append("the modal force meets the dissipation again at a larger amplitude "
-                       "(isolated branch possible)")
+    if hit.size and np.any(g[hit[0] :] < 0):
+        reasons.append(
+            "the modal force meets the dissipation again at a larger amplitude "
+            "(isolated branch possible)"
+        )
     blocking = [r for r in reasons if not r.startswith("the modal force meets")]
     return Synthesis(
-        level=float(level), freq_hz=curve_f, out_amp=curve_y, peak_freq_hz=f_pk,
-        peak_amplitude=y_pk, peak_modal_amplitude=a_pk, valid=not blocking, reasons=reasons,
+        level=float(level),
+        freq_hz=curve_f,
+        out_amp=curve_y,
+        peak_freq_hz=f_pk,
+        peak_amplitude=y_pk,
+        peak_modal_amplitude=a_pk,
+        valid=not blocking,
+        reasons=reasons,
         peak_h1=h1_pk,
-        checks=dict(mac=mac, separation=gap, higher_harmonics=hh, damping_ratio=d_pk,
-                    other_modes=share))
+        checks=dict(
+            mac=mac, separation=gap, higher_harmonics=hh, damping_ratio=d_pk, other_modes=share
+        ),
+    )

@@ -22,9 +22,11 @@ from .results import CaseResult
 KNOBS = ("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper")
 
 
-QUANTITIES = (("peak_amplitude_mm", "peak amplitude", "mm"),
-              ("peak_frequency_hz", "resonance frequency", "Hz"),
-              ("friction_energy_mj", "friction energy per cycle", "mJ"))
+QUANTITIES = (
+    ("peak_amplitude_mm", "peak amplitude", "mm"),
+    ("peak_frequency_hz", "resonance frequency", "Hz"),
+    ("friction_energy_mj", "friction energy per cycle", "mJ"),
+)
 
 
 STAGES = ("geometry", "reduction", "assembly", "hbm")
@@ -87,8 +89,11 @@ class Setting:
 
     @property
     def failed(self) -> list[str]:
-        return [f"{c}: {r.branch.message or 'no resonance peak'}"
-                for c, r in self.results.items() if r.branch.failed or r.peak_index < 0]
+        return [
+            f"{c}: {r.branch.message or 'no resonance peak'}"
+            for c, r in self.results.items()
+            if r.branch.failed or r.peak_index < 0
+        ]
 
     def error(self, q: str | None = None) -> float | None:
         """Largest error (percent) over the conditions, of quantity ``q`` or of all three."""
@@ -118,8 +123,9 @@ def relative_errors(st: Setting, ref: Setting) -> dict[str, dict[str, float | No
         out[cond] = {}
         for q, _, _ in QUANTITIES:
             a, b = s.get(q), sr.get(q)
-            out[cond][q] = (abs(a - b) / abs(b) * 100.0 if a is not None and b is not None
-                            and b != 0 else None)
+            out[cond][q] = (
+                abs(a - b) / abs(b) * 100.0 if a is not None and b is not None and b != 0 else None
+            )
     return out
 
 
@@ -130,13 +136,17 @@ def ladder_self_errors(ladders: dict[str, list[Setting]]) -> dict[str, list[floa
     alone makes (its convergence), free of the other knobs' errors that every
     one-knob setting carries against the reference.
     """
-    return {knob: [worst(relative_errors(st, lad[-1])) for st in lad]
-            for knob, lad in ladders.items()}
+    return {
+        knob: [worst(relative_errors(st, lad[-1])) for st in lad] for knob, lad in ladders.items()
+    }
 
 
 def setting_row(st: Setting) -> dict[str, Any]:
-    row: dict[str, Any] = {"label": st.label, "role": st.role,
-                           "knobs": "; ".join(f"{k}={m}" for k, m in st.members)}
+    row: dict[str, Any] = {
+        "label": st.label,
+        "role": st.role,
+        "knobs": "; ".join(f"{k}={m}" for k, m in st.members),
+    }
     for k in KNOBS:
         row[k] = level_label(k, st.values[k])
     for s in STAGES:

@@ -19,29 +19,91 @@ from ..geometry.shapes import names as shape_names
 ROOT = Path(__file__).resolve().parents[2]
 
 UNITS: dict[str, str] = {
-    "phases": "deg", "forces": "N", "response-blade": "", "band-in-phase": "Hz",
-    "band-out-of-phase": "Hz", "band-margin": "fraction", "mu": "", "cf": "N",
-    "kt-line": "N/m per m", "kn-line": "N/m per m", "kt-face": "N/m per m^2",
-    "kn-face": "N/m per m^2", "damping": "ratio", "mesh-size": "mm", "modes": "per body",
-    "points-per-line": "per line", "harmonics": "", "nt": "samples per period",
-    "cone-angle": "deg", "max-points": "points per curve", "tolerance": "%",
-    "levels-mesh-size": "mm", "levels-nt": "samples per period",
-    "levels-points-per-line": "per line", "levels-modes": "per body", "peak-tolerance": "%",
+    "phases": "deg",
+    "forces": "N",
+    "response-blade": "",
+    "band-in-phase": "Hz",
+    "band-out-of-phase": "Hz",
+    "band-margin": "fraction",
+    "mu": "",
+    "cf": "N",
+    "kt-line": "N/m per m",
+    "kn-line": "N/m per m",
+    "kt-face": "N/m per m^2",
+    "kn-face": "N/m per m^2",
+    "damping": "ratio",
+    "mesh-size": "mm",
+    "modes": "per body",
+    "points-per-line": "per line",
+    "harmonics": "",
+    "nt": "samples per period",
+    "cone-angle": "deg",
+    "max-points": "points per curve",
+    "tolerance": "%",
+    "levels-mesh-size": "mm",
+    "levels-nt": "samples per period",
+    "levels-points-per-line": "per line",
+    "levels-modes": "per body",
+    "peak-tolerance": "%",
 }
 
-_MODEL = ("mu", "cf", "kt-line", "kn-line", "kt-face", "kn-face", "damping", "mesh-size",
-          "modes", "rigid-damper", "points-per-line", "cone-angle", "geometry")
+_MODEL = (
+    "mu",
+    "cf",
+    "kt-line",
+    "kn-line",
+    "kt-face",
+    "kn-face",
+    "damping",
+    "mesh-size",
+    "modes",
+    "rigid-damper",
+    "points-per-line",
+    "cone-angle",
+    "geometry",
+)
 _SOLVE = ("harmonics", "nt", "max-points", "stability")
-_CASES = ("dampers", "phases", "forces", "response-blade", "band-in-phase",
-          "band-out-of-phase", "band-margin")
+_CASES = (
+    "dampers",
+    "phases",
+    "forces",
+    "response-blade",
+    "band-in-phase",
+    "band-out-of-phase",
+    "band-margin",
+)
 KIND_OPTIONS: dict[str, tuple[str, ...]] = {
     "comparison": ("name", "kind", *_CASES, *_MODEL, *_SOLVE),
     "sweep": ("name", "kind", "sweep", "sweep-values", *_CASES, *_MODEL, *_SOLVE),
-    "fidelity": ("name", "kind", "dampers", "phases", "forces", "tolerance", "knobs",
-                 "levels-mesh-size", "levels-modes", "levels-harmonics", "levels-nt",
-                 "levels-points-per-line", "levels-rigid-damper", *_MODEL, *_SOLVE),
-    "robustness": ("name", "kind", "methods", "hard-cases", "peak-tolerance", "time-check",
-                   "response-blade", "band-margin", *_MODEL, *_SOLVE),
+    "fidelity": (
+        "name",
+        "kind",
+        "dampers",
+        "phases",
+        "forces",
+        "tolerance",
+        "knobs",
+        "levels-mesh-size",
+        "levels-modes",
+        "levels-harmonics",
+        "levels-nt",
+        "levels-points-per-line",
+        "levels-rigid-damper",
+        *_MODEL,
+        *_SOLVE,
+    ),
+    "robustness": (
+        "name",
+        "kind",
+        "methods",
+        "hard-cases",
+        "peak-tolerance",
+        "time-check",
+        "response-blade",
+        "band-margin",
+        *_MODEL,
+        *_SOLVE,
+    ),
 }
 
 
@@ -60,8 +122,9 @@ def _origin(source: str) -> str:
     return _rel(source)
 
 
-def used_inputs(values: dict[str, Any], sources: dict[str, str] | None = None,
-                kind: str | None = None) -> list[dict[str, Any]]:
+def used_inputs(
+    values: dict[str, Any], sources: dict[str, str] | None = None, kind: str | None = None
+) -> list[dict[str, Any]]:
     """Rows ``{option, value, unit, source}`` for the options of this study kind.
 
     ``values`` are the spec's options (``StudySpec.as_dict()``), ``sources``
@@ -91,9 +154,14 @@ def used_inputs(values: dict[str, Any], sources: dict[str, str] | None = None,
 
     contact_file = _rel(DEFAULT_FILE) if DEFAULT_FILE.is_file() else "ContactParams defaults"
     cp: ContactParams = load_contact_params()
-    contact_default = {"mu": cp.mu, "cf": cp.cf_n, "kt-line": cp.kt_line_n_per_m2,
-                       "kn-line": cp.kn_line_n_per_m2, "kt-face": cp.kt_face_n_per_m3,
-                       "kn-face": cp.kn_face_n_per_m3}
+    contact_default = {
+        "mu": cp.mu,
+        "cf": cp.cf_n,
+        "kt-line": cp.kt_line_n_per_m2,
+        "kn-line": cp.kn_line_n_per_m2,
+        "kt-face": cp.kt_face_n_per_m3,
+        "kn-face": cp.kn_face_n_per_m3,
+    }
     geo_file = values.get("geometry")
     sweep = values.get("sweep") if kind == "sweep" else None
 
@@ -136,10 +204,8 @@ def _geometry_default(name: str, dampers: list[str], geo_file: Any) -> tuple[Any
         if name != "mesh-size" and name not in own:
             continue
         gp = load_geometry_params(d, geo_file)
-        vals[d] = (gp.rig.mesh.size_mm if name == "mesh-size" else
-                   getattr(gp.shape, own[name][0]))
-    files = ["geometry/rig.toml"] if name == "mesh-size" else [
-        f"geometry/{d}.toml" for d in vals]
+        vals[d] = gp.rig.mesh.size_mm if name == "mesh-size" else getattr(gp.shape, own[name][0])
+    files = ["geometry/rig.toml"] if name == "mesh-size" else [f"geometry/{d}.toml" for d in vals]
     src = "default: " + (f"{_rel(geo_file)} over " if geo_file else "") + ", ".join(files)
     if not vals:
         return None, src

@@ -39,21 +39,40 @@ def pick_cheapest(rows: list[dict[str, Any]], tolerance_pct: float) -> dict[str,
     "picked": row or None, "closest": row or None, "reason": str}``; when
     nothing meets the tolerance, ``closest`` is the most accurate row.
     """
-    valid = [r for r in rows if r.get("max_error_pct") is not None
-             and math.isfinite(r["max_error_pct"])]
+    valid = [
+        r for r in rows if r.get("max_error_pct") is not None and math.isfinite(r["max_error_pct"])
+    ]
     meeting = [r for r in valid if r["max_error_pct"] <= tolerance_pct]
     if meeting:
         best = min(meeting, key=lambda r: (r["time_s"], r["max_error_pct"]))
-        return {"met": True, "picked": best, "closest": best, "reason": (
-            f"'{best['label']}' is the cheapest of the {len(meeting)} of {len(rows)} measured "
-            f"settings whose worst error ({best['max_error_pct']:.3g} %) is within "
-            f"{tolerance_pct:g} %: {best['time_s']:.1f} s")}
+        return {
+            "met": True,
+            "picked": best,
+            "closest": best,
+            "reason": (
+                f"'{best['label']}' is the cheapest of the {len(meeting)} of {len(rows)} measured "
+                f"settings whose worst error ({best['max_error_pct']:.3g} %) is within "
+                f"{tolerance_pct:g} %: {best['time_s']:.1f} s"
+            ),
+        }
     if not valid:
-        return {"met": False, "picked": None, "closest": None, "reason": (
-            f"no setting meets {tolerance_pct:g} %: none of the {len(rows)} settings could be "
-            "compared with the reference (failed solves)")}
+        return {
+            "met": False,
+            "picked": None,
+            "closest": None,
+            "reason": (
+                f"no setting meets {tolerance_pct:g} %: none of the {len(rows)} settings could be "
+                "compared with the reference (failed solves)"
+            ),
+        }
     close = min(valid, key=lambda r: (r["max_error_pct"], r["time_s"]))
-    return {"met": False, "picked": None, "closest": close, "reason": (
-        f"NO setting meets {tolerance_pct:g} %: the closest is '{close['label']}' with a worst "
-        f"error of {close['max_error_pct']:.3g} % ({close['time_s']:.1f} s); refine the "
-        "levels or loosen the tolerance")}
+    return {
+        "met": False,
+        "picked": None,
+        "closest": close,
+        "reason": (
+            f"NO setting meets {tolerance_pct:g} %: the closest is '{close['label']}' with a worst "
+            f"error of {close['max_error_pct']:.3g} % ({close['time_s']:.1f} s); refine the "
+            "levels or loosen the tolerance"
+        ),
+    }

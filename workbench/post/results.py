@@ -114,12 +114,16 @@ class CaseResult:
             return "no point computed: no peak"
         f, a = float(self.freq_hz[i]), float(self.amp_mm[i])
         if self.branch.completed and not self.branch.failed:
-            where = (f"the highest point is at the band edge ({f:.6g} Hz): the resonance lies "
-                     "outside the band")
+            where = (
+                f"the highest point is at the band edge ({f:.6g} Hz): the resonance lies "
+                "outside the band"
+            )
         else:
             why = self.branch.message or "stopped early"
-            where = (f"the curve stopped at {float(self.freq_hz[-1]):.6g} Hz before covering its "
-                     f"resonance ({why})")
+            where = (
+                f"the curve stopped at {float(self.freq_hz[-1]):.6g} Hz before covering its "
+                f"resonance ({why})"
+            )
         return f"{where}; {a:.4g} mm is only a lower bound of the peak"
 
     @property
@@ -141,8 +145,12 @@ class CaseResult:
         i = self.peak_index
         ok = i >= 0
         out = {
-            "case": self.case_id, "damper": self.damper, "phase_deg": self.phase_deg,
-            "family": self.family, "force_n": self.force_n, "variant": self.variant,
+            "case": self.case_id,
+            "damper": self.damper,
+            "phase_deg": self.phase_deg,
+            "family": self.family,
+            "force_n": self.force_n,
+            "variant": self.variant,
             "peak_frequency_hz": float(self.freq_hz[i]) if ok else None,
             "peak_amplitude_mm": float(self.amp_mm[i]) if ok else None,
             # the harmonic-1 peak, at its own frequency: the vibration without the mean
@@ -158,8 +166,9 @@ class CaseResult:
             "peak_stability": self.branch.stability_name(i) if ok else None,
             "completed": bool(self.branch.completed),
             "message": self.branch.message,
-            "wall_s": round(float(self.timings.get("hbm", self.branch.timings.get("total", 0.0))),
-                            3),
+            "wall_s": round(
+                float(self.timings.get("hbm", self.branch.timings.get("total", 0.0))), 3
+            ),
         }
         out.update({f"share_{k}": v for k, v in self.status_shares().items()})
         out.update(self._peak_bound())
@@ -168,19 +177,31 @@ class CaseResult:
     def _h1_peak(self) -> dict[str, Any]:
         b = self.branch.summary(self.output)
         a = b.get("h1_amplitude")
-        return {"h1_amplitude_mm": None if a is None else float(a) * 1e3,
-                "h1_peak_frequency_hz": b.get("h1_peak_frequency_hz")}
+        return {
+            "h1_amplitude_mm": None if a is None else float(a) * 1e3,
+            "h1_peak_frequency_hz": b.get("h1_peak_frequency_hz"),
+        }
 
     def _peak_bound(self) -> dict[str, Any]:
         """Summary keys saying whether the peak was reached; a peak the curve did not reach
         is never reported as one: its values are None and its amplitude a lower bound."""
         i, covered = self.peak_index, self.peak_covered
-        out: dict[str, Any] = {"peak_covered": covered, "peak_lower_bound_mm": None,
-                               "peak_note": self.peak_note()}
+        out: dict[str, Any] = {
+            "peak_covered": covered,
+            "peak_lower_bound_mm": None,
+            "peak_note": self.peak_note(),
+        }
         if not covered and i >= 0:
             out["peak_lower_bound_mm"] = float(self.amp_mm[i])
-            for k in ("peak_frequency_hz", "peak_amplitude_mm", "friction_energy_mj",
-                      "peak_stable", "peak_stability", "h1_amplitude_mm", "h1_peak_frequency_hz"):
+            for k in (
+                "peak_frequency_hz",
+                "peak_amplitude_mm",
+                "friction_energy_mj",
+                "peak_stable",
+                "peak_stability",
+                "h1_amplitude_mm",
+                "h1_peak_frequency_hz",
+            ):
                 out[k] = None
         return out
 
@@ -218,10 +239,16 @@ class CaseResult:
             g = h["case"]
             a = g.attrs
             return cls(
-                damper=str(a["damper"]), phase_deg=float(a["phase_deg"]),
-                force_n=float(a["force_n"]), branch=branch, points=g["points"][()],
-                side=g["side"][()], variant=str(a["variant"]), digest=str(a["digest"]),
-                output=int(a["output"]), params=json.loads(a["params"]),
+                damper=str(a["damper"]),
+                phase_deg=float(a["phase_deg"]),
+                force_n=float(a["force_n"]),
+                branch=branch,
+                points=g["points"][()],
+                side=g["side"][()],
+                variant=str(a["variant"]),
+                digest=str(a["digest"]),
+                output=int(a["output"]),
+                params=json.loads(a["params"]),
                 timings=json.loads(a["timings"]),
             )
 
@@ -237,8 +264,14 @@ class StudyResults:
     extras: dict[str, Any] = field(default_factory=dict)  # e.g. linear frequencies per damper
     timings: dict[str, float] = field(default_factory=dict)
 
-    def select(self, *, damper: str | None = None, phase_deg: float | None = None,
-               force_n: float | None = None, variant: str | None = None) -> list[CaseResult]:
+    def select(
+        self,
+        *,
+        damper: str | None = None,
+        phase_deg: float | None = None,
+        force_n: float | None = None,
+        variant: str | None = None,
+    ) -> list[CaseResult]:
         """The cases matching every given key (floats compared to 1e-9)."""
         out = []
         for c in self.cases:
@@ -279,8 +312,11 @@ class StudyResults:
         import h5py
 
         path = Path(path)
-        with tempfile.TemporaryDirectory() as scratch, atomic_path(path) as tmp, \
-                h5py.File(tmp, "w") as h:
+        with (
+            tempfile.TemporaryDirectory() as scratch,
+            atomic_path(path) as tmp,
+            h5py.File(tmp, "w") as h,
+        ):
             h.attrs["name"], h.attrs["kind"] = self.name, self.kind
             h.attrs["inputs"] = json.dumps(self.inputs, default=str)
             h.attrs["extras"] = json.dumps(self.extras, default=_np_default)
@@ -310,9 +346,14 @@ class StudyResults:
                     for key, val in h[f"cases/{cid}"].attrs.items():
                         dst.attrs[key] = val
                 cases.append(CaseResult.load(one))
-            return cls(name=str(a["name"]), kind=str(a["kind"]), cases=cases,
-                       inputs=json.loads(a["inputs"]), extras=json.loads(a["extras"]),
-                       timings=json.loads(a["timings"]))
+            return cls(
+                name=str(a["name"]),
+                kind=str(a["kind"]),
+                cases=cases,
+                inputs=json.loads(a["inputs"]),
+                extras=json.loads(a["extras"]),
+                timings=json.loads(a["timings"]),
+            )
 
 
 def _np_default(o: Any) -> Any:

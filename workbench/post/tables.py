@@ -29,11 +29,30 @@ from ..io import write_text
 from .results import STATUS_KEYS, STATUS_NAMES, CaseResult, StudyResults, family_name
 
 __all__ = [
-    "STATUS_KEYS", "STATUS_NAMES", "PeakCurve", "SweepCurve", "Table", "base_variant",
-    "case_label", "cases_table", "curve_set", "energy_table", "families", "pick_forces",
-    "peak_amplitude_table", "peak_curve", "peak_frequency_table", "sci", "slug",
-    "stability_runs", "status_share_curves", "status_shares_table", "sweep_curve",
-    "sweep_curves", "sweep_table", "sweep_value",
+    "STATUS_KEYS",
+    "STATUS_NAMES",
+    "PeakCurve",
+    "SweepCurve",
+    "Table",
+    "base_variant",
+    "case_label",
+    "cases_table",
+    "curve_set",
+    "energy_table",
+    "families",
+    "pick_forces",
+    "peak_amplitude_table",
+    "peak_curve",
+    "peak_frequency_table",
+    "sci",
+    "slug",
+    "stability_runs",
+    "status_share_curves",
+    "status_shares_table",
+    "sweep_curve",
+    "sweep_curves",
+    "sweep_table",
+    "sweep_value",
 ]
 
 
@@ -97,6 +116,7 @@ def slug(text: str) -> str:
 
 def families(results: StudyResults) -> list[float]:
     """The phase angles of the study, in-phase first, then out-of-phase, then the others."""
+
     def key(p: float) -> tuple[int, float]:
         name = family_name(p)
         return ({"in-phase": 0, "out-of-phase": 1}.get(name, 2), float(p) % 360.0)
@@ -110,15 +130,15 @@ def base_variant(results: StudyResults) -> str:
     return "" if "" in variants or not variants else variants[0]
 
 
-def curve_set(results: StudyResults, damper: str, phase_deg: float,
-              variant: str | None = None) -> list[CaseResult]:
+def curve_set(
+    results: StudyResults, damper: str, phase_deg: float, variant: str | None = None
+) -> list[CaseResult]:
     """Every force of one damper and one family (one variant), sorted by force."""
     cases = results.select(damper=damper, phase_deg=phase_deg, variant=variant)
     return sorted(cases, key=lambda c: c.force_n)
 
 
-def pick_forces(forces: Sequence[float], preferred: Sequence[float] = (9.6, 30.0)
-                ) -> list[float]:
+def pick_forces(forces: Sequence[float], preferred: Sequence[float] = (9.6, 30.0)) -> list[float]:
     """The forces of the status maps: ``preferred`` if all present, else lowest and highest."""
     fs = sorted(set(float(f) for f in forces))
     if not fs:
@@ -181,8 +201,12 @@ def _at_peak(case: CaseResult) -> tuple[float, float, float, bool]:
     i = case.peak_index
     if i < 0:
         return (math.nan,) * 3 + (False,)
-    return (float(case.amp_mm[i]), float(case.freq_hz[i]), float(case.energy_mj[i].sum()),
-            bool(case.stable[i]))
+    return (
+        float(case.amp_mm[i]),
+        float(case.freq_hz[i]),
+        float(case.energy_mj[i].sum()),
+        bool(case.stable[i]),
+    )
 
 
 def peak_curve(cases: Sequence[CaseResult]) -> PeakCurve:
@@ -193,10 +217,13 @@ def peak_curve(cases: Sequence[CaseResult]) -> PeakCurve:
     _check_one_set(cases)
     vals = [_at_peak(c) for c in cases]
     return PeakCurve(
-        damper=cases[0].damper, phase_deg=cases[0].phase_deg,
+        damper=cases[0].damper,
+        phase_deg=cases[0].phase_deg,
         force_n=np.array([c.force_n for c in cases]),
-        amp_mm=np.array([v[0] for v in vals]), freq_hz=np.array([v[1] for v in vals]),
-        energy_mj=np.array([v[2] for v in vals]), stable=np.array([v[3] for v in vals]),
+        amp_mm=np.array([v[0] for v in vals]),
+        freq_hz=np.array([v[1] for v in vals]),
+        energy_mj=np.array([v[2] for v in vals]),
+        stable=np.array([v[3] for v in vals]),
         failed=np.array([bool(c.branch.failed) for c in cases]),
     )
 
@@ -224,8 +251,11 @@ def sweep_value(case: CaseResult, option: str) -> float:
     for key in (option, option.replace("-", "_"), option.replace("_", "-")):
         if key in case.params and case.params[key] is not None:
             return float(case.params[key])
-    raise InputError(f"params[{option!r}] of case {case.case_id}", sorted(case.params),
-                     f"the swept option {option!r} in every case's parameters")
+    raise InputError(
+        f"params[{option!r}] of case {case.case_id}",
+        sorted(case.params),
+        f"the swept option {option!r} in every case's parameters",
+    )
 
 
 @dataclass(frozen=True)
@@ -258,10 +288,15 @@ def sweep_curve(cases: Iterable[CaseResult], option: str) -> SweepCurve:
         raise InputError("cases", sorted(keys), "cases of one damper, family and force")
     vals = [_at_peak(c) for c in cases]
     return SweepCurve(
-        damper=cases[0].damper, phase_deg=cases[0].phase_deg, force_n=cases[0].force_n,
-        option=option, value=np.array([sweep_value(c, option) for c in cases]),
-        amp_mm=np.array([v[0] for v in vals]), freq_hz=np.array([v[1] for v in vals]),
-        energy_mj=np.array([v[2] for v in vals]), stable=np.array([v[3] for v in vals]),
+        damper=cases[0].damper,
+        phase_deg=cases[0].phase_deg,
+        force_n=cases[0].force_n,
+        option=option,
+        value=np.array([sweep_value(c, option) for c in cases]),
+        amp_mm=np.array([v[0] for v in vals]),
+        freq_hz=np.array([v[1] for v in vals]),
+        energy_mj=np.array([v[2] for v in vals]),
+        stable=np.array([v[3] for v in vals]),
         failed=np.array([bool(c.branch.failed) for c in cases]),
     )
 
@@ -290,8 +325,12 @@ def csv_cell(v: Any, digits: int = 9) -> str:
     return str(v)
 
 
-def write_rows_csv(path: str | Path, rows: Sequence[dict[str, Any]],
-                   cols: Sequence[str] | None = None, digits: int = 9) -> Path:
+def write_rows_csv(
+    path: str | Path,
+    rows: Sequence[dict[str, Any]],
+    cols: Sequence[str] | None = None,
+    digits: int = 9,
+) -> Path:
     """Write dict rows as CSV (columns ``cols``, default the first row's keys), atomically."""
     cols = list(cols if cols is not None else (rows[0] if rows else []))
     buf = io.StringIO()
@@ -338,10 +377,12 @@ class Table:
         return [r[self.header.index(name)] for r in self.rows]
 
 
-def _force_table(results: StudyResults, phase_deg: float, corner: str, value: Any,
-                 fmt: Any, variant: str | None) -> Table:
-    forces = [f for f in results.forces
-              if results.select(phase_deg=phase_deg, force_n=f, variant=variant)]
+def _force_table(
+    results: StudyResults, phase_deg: float, corner: str, value: Any, fmt: Any, variant: str | None
+) -> Table:
+    forces = [
+        f for f in results.forces if results.select(phase_deg=phase_deg, force_n=f, variant=variant)
+    ]
     rows = []
     for d in results.dampers:
         cases = curve_set(results, d, phase_deg, variant)
@@ -367,26 +408,47 @@ def energy_table(results: StudyResults, phase_deg: float, variant: str | None = 
     """
     cases = [c for c in results.select(phase_deg=phase_deg, variant=variant)]
     floor = energy_floor([_at_peak(c)[2] for c in cases])
-    return _force_table(results, phase_deg, "energy per cycle (mJ) at force",
-                        lambda c: _at_peak(c)[2], lambda v: energy_text(v, floor), variant)
+    return _force_table(
+        results,
+        phase_deg,
+        "energy per cycle (mJ) at force",
+        lambda c: _at_peak(c)[2],
+        lambda v: energy_text(v, floor),
+        variant,
+    )
 
 
-def peak_amplitude_table(results: StudyResults, phase_deg: float,
-                         variant: str | None = None) -> Table:
+def peak_amplitude_table(
+    results: StudyResults, phase_deg: float, variant: str | None = None
+) -> Table:
     """Largest response amplitude, mm: dampers x forces."""
-    return _force_table(results, phase_deg, "peak amplitude (mm) at force",
-                        lambda c: _at_peak(c)[0], lambda v: fixed(v, 4), variant)
+    return _force_table(
+        results,
+        phase_deg,
+        "peak amplitude (mm) at force",
+        lambda c: _at_peak(c)[0],
+        lambda v: fixed(v, 4),
+        variant,
+    )
 
 
-def peak_frequency_table(results: StudyResults, phase_deg: float,
-                         variant: str | None = None) -> Table:
+def peak_frequency_table(
+    results: StudyResults, phase_deg: float, variant: str | None = None
+) -> Table:
     """Frequency of the largest response, Hz: dampers x forces."""
-    return _force_table(results, phase_deg, "resonance frequency (Hz) at force",
-                        lambda c: _at_peak(c)[1], lambda v: fixed(v, 5), variant)
+    return _force_table(
+        results,
+        phase_deg,
+        "resonance frequency (Hz) at force",
+        lambda c: _at_peak(c)[1],
+        lambda v: fixed(v, 5),
+        variant,
+    )
 
 
-def status_shares_table(results: StudyResults, phase_deg: float,
-                        variant: str | None = None) -> Table:
+def status_shares_table(
+    results: StudyResults, phase_deg: float, variant: str | None = None
+) -> Table:
     """Share of the pairs in each status at resonance, percent: one row per damper and force."""
     rows = []
     for d in results.dampers:
@@ -398,23 +460,46 @@ def status_shares_table(results: StudyResults, phase_deg: float,
 
 def cases_table(results: StudyResults) -> Table:
     """One row per case: peak, energy, stability, shares, cost, completion (full precision)."""
-    header = ("case", "damper", "family", "force (N)", "variant", "peak frequency (Hz)",
-              "peak amplitude (mm)", "receptance (mm/N)", "friction energy (mJ)",
-              "peak stable", "points", "unstable points", "completed", "wall time (s)",
-              "message")
+    header = (
+        "case",
+        "damper",
+        "family",
+        "force (N)",
+        "variant",
+        "peak frequency (Hz)",
+        "peak amplitude (mm)",
+        "receptance (mm/N)",
+        "friction energy (mJ)",
+        "peak stable",
+        "points",
+        "unstable points",
+        "completed",
+        "wall time (s)",
+        "message",
+    )
     rows = []
     for c in results.cases:
         s = c.summary()
         amp = s["peak_amplitude_mm"]
-        rows.append((
-            c.case_id, c.damper, c.family, f"{c.force_n:g}", c.variant,
-            fixed(_nan(s["peak_frequency_hz"]), 7), fixed(_nan(amp), 6),
-            fixed(_nan(amp) / c.force_n, 6), sci(_nan(s["friction_energy_mj"]), 4),
-            _stability_cell(s),
-            str(s["n_points"]), str(s["n_unstable"]),
-            "yes" if s["completed"] else ("failed" if c.branch.failed else "no"),
-            f"{s['wall_s']:.3g}", s["message"],
-        ))
+        rows.append(
+            (
+                c.case_id,
+                c.damper,
+                c.family,
+                f"{c.force_n:g}",
+                c.variant,
+                fixed(_nan(s["peak_frequency_hz"]), 7),
+                fixed(_nan(amp), 6),
+                fixed(_nan(amp) / c.force_n, 6),
+                sci(_nan(s["friction_energy_mj"]), 4),
+                _stability_cell(s),
+                str(s["n_points"]),
+                str(s["n_unstable"]),
+                "yes" if s["completed"] else ("failed" if c.branch.failed else "no"),
+                f"{s['wall_s']:.3g}",
+                s["message"],
+            )
+        )
     for k, c in enumerate(results.cases):  # a peak the curve did not reach: a lower bound
         low = c.summary()["peak_lower_bound_mm"]
         if low is not None:
@@ -433,12 +518,31 @@ def sweep_table(curves: Sequence[SweepCurve]) -> Table:
     rows = []
     for sc in curves:
         for k in range(sc.value.size):
-            rows.append((sc.damper, sc.family, f"{sc.force_n:g}", f"{sc.value[k]:g}",
-                         fixed(sc.freq_hz[k], 6), fixed(sc.amp_mm[k], 5),
-                         sci(sc.energy_mj[k], 3),
-                         "failed" if sc.failed[k] else ("yes" if sc.stable[k] else "no")))
-    return Table(("damper", "family", "force (N)", opt, "peak frequency (Hz)",
-                  "peak amplitude (mm)", "friction energy (mJ)", "peak stable"), tuple(rows))
+            rows.append(
+                (
+                    sc.damper,
+                    sc.family,
+                    f"{sc.force_n:g}",
+                    f"{sc.value[k]:g}",
+                    fixed(sc.freq_hz[k], 6),
+                    fixed(sc.amp_mm[k], 5),
+                    sci(sc.energy_mj[k], 3),
+                    "failed" if sc.failed[k] else ("yes" if sc.stable[k] else "no"),
+                )
+            )
+    return Table(
+        (
+            "damper",
+            "family",
+            "force (N)",
+            opt,
+            "peak frequency (Hz)",
+            "peak amplitude (mm)",
+            "friction energy (mJ)",
+            "peak stable",
+        ),
+        tuple(rows),
+    )
 
 
 def _stability_cell(s: dict) -> str:

@@ -21,14 +21,21 @@ from ..errors import InputError
 INPUTS = ("mu", "cf", "kt", "kn", "damping", "seat-tilt")
 
 
-INPUT_LABELS = {"mu": "friction coefficient mu", "cf": "CF factor", "kt": "kt factor",
-                "kn": "kn factor", "damping": "modal damping ratio",
-                "seat-tilt": "seat tilt, deg"}
+INPUT_LABELS = {
+    "mu": "friction coefficient mu",
+    "cf": "CF factor",
+    "kt": "kt factor",
+    "kn": "kn factor",
+    "damping": "modal damping ratio",
+    "seat-tilt": "seat tilt, deg",
+}
 
 
-QUANTITIES = (("peak_amplitude_mm", "peak amplitude", "mm"),
-              ("peak_frequency_hz", "resonance frequency", "Hz"),
-              ("friction_energy_mj", "friction energy per cycle", "mJ"))
+QUANTITIES = (
+    ("peak_amplitude_mm", "peak amplitude", "mm"),
+    ("peak_frequency_hz", "resonance frequency", "Hz"),
+    ("friction_energy_mj", "friction energy per cycle", "mJ"),
+)
 
 
 DIST_KINDS = ("uniform", "normal", "lognormal")
@@ -67,8 +74,11 @@ class Distribution:
         f_lo = d.cdf(self.lo) if self.lo is not None else 0.0
         f_hi = d.cdf(self.hi) if self.hi is not None else 1.0
         x = d.ppf(f_lo + u * (f_hi - f_lo))
-        return np.clip(x, self.lo if self.lo is not None else -np.inf,
-                       self.hi if self.hi is not None else np.inf)
+        return np.clip(
+            x,
+            self.lo if self.lo is not None else -np.inf,
+            self.hi if self.hi is not None else np.inf,
+        )
 
     @property
     def support(self) -> tuple[float, float]:
@@ -77,8 +87,11 @@ class Distribution:
         return tuple(float(v) for v in self.ppf(np.array([0.0, 1.0])))  # type: ignore[return-value]
 
     def describe(self) -> str:
-        bounds = "" if self.kind == "uniform" or (self.lo is None and self.hi is None) else \
-            f", truncated to [{self.lo:g}, {self.hi:g}]"
+        bounds = (
+            ""
+            if self.kind == "uniform" or (self.lo is None and self.hi is None)
+            else f", truncated to [{self.lo:g}, {self.hi:g}]"
+        )
         if self.kind == "uniform":
             return f"uniform on [{self.a:g}, {self.b:g}]"
         if self.kind == "normal":
@@ -88,8 +101,10 @@ class Distribution:
 
 def parse_distribution(name: str, text: str) -> Distribution:
     """``"uniform LO HI"``, ``"normal MEAN SD [LO HI]"``, ``"lognormal MEDIAN SIGMA [LO HI]"``."""
-    allowed = ("'uniform LO HI', 'normal MEAN SD [LO HI]' or 'lognormal MEDIAN SIGMA_LN "
-               "[LO HI]' (numbers separated by spaces or commas)")
+    allowed = (
+        "'uniform LO HI', 'normal MEAN SD [LO HI]' or 'lognormal MEDIAN SIGMA_LN "
+        "[LO HI]' (numbers separated by spaces or commas)"
+    )
     parts = str(text).replace(",", " ").split()
     if not parts or parts[0].lower() not in DIST_KINDS:
         raise InputError(name, text, allowed)
@@ -155,8 +170,11 @@ class Design:
 
     def problem(self) -> dict[str, Any]:
         """SALib's problem on the unit cube (the indices do not change under the inverse CDFs)."""
-        return {"num_vars": len(self.names), "names": list(self.names),
-                "bounds": [[0.0, 1.0]] * len(self.names)}
+        return {
+            "num_vars": len(self.names),
+            "names": list(self.names),
+            "bounds": [[0.0, 1.0]] * len(self.names),
+        }
 
 
 def make_design(dists: dict[str, Distribution], n: int, seed: int) -> Design:
@@ -169,8 +187,7 @@ def make_design(dists: dict[str, Distribution], n: int, seed: int) -> Design:
     problem = {"num_vars": len(names), "names": list(names), "bounds": [[0.0, 1.0]] * len(names)}
     with warnings.catch_warnings():  # "not a power of 2": allowed, said in the docs
         warnings.simplefilter("ignore")
-        unit = sobol.sample(problem, int(n), calc_second_order=False, scramble=True,
-                            seed=int(seed))
+        unit = sobol.sample(problem, int(n), calc_second_order=False, scramble=True, seed=int(seed))
     values = np.column_stack([dists[k].ppf(unit[:, j]) for j, k in enumerate(names)])
     return Design(names, unit, values, int(n), int(seed))
 
@@ -182,10 +199,17 @@ def statistics(y: np.ndarray, threshold: float | None = None) -> dict[str, float
     out: dict[str, float] = {"n": int(ok.size), "n_missing": int(y.size - ok.size)}
     if ok.size == 0:
         return out
-    out.update({"mean": float(ok.mean()), "sd": float(ok.std(ddof=1)) if ok.size > 1 else 0.0,
-                "min": float(ok.min()), "p05": float(np.quantile(ok, 0.05)),
-                "p50": float(np.quantile(ok, 0.5)), "p95": float(np.quantile(ok, 0.95)),
-                "max": float(ok.max())})
+    out.update(
+        {
+            "mean": float(ok.mean()),
+            "sd": float(ok.std(ddof=1)) if ok.size > 1 else 0.0,
+            "min": float(ok.min()),
+            "p05": float(np.quantile(ok, 0.05)),
+            "p50": float(np.quantile(ok, 0.5)),
+            "p95": float(np.quantile(ok, 0.95)),
+            "max": float(ok.max()),
+        }
+    )
     if threshold is not None:
         out["p_exceed"] = float(np.mean(ok > threshold))
     return out
@@ -204,8 +228,11 @@ def sobol_indices(design: Design, y: np.ndarray, seed: int = 0) -> dict[str, Any
         raise InputError("outputs", y.shape, f"({design.n_rows},) one per design row")
     blocks = y.reshape(design.n_base, design.block)
     keep = np.all(np.isfinite(blocks), axis=1)
-    out: dict[str, Any] = {"names": list(design.names), "n_used": int(keep.sum()),
-                           "n_base": design.n_base}
+    out: dict[str, Any] = {
+        "names": list(design.names),
+        "n_used": int(keep.sum()),
+        "n_base": design.n_base,
+    }
     if keep.sum() < 2 or np.ptp(blocks[keep]) == 0.0:
         nan = [float("nan")] * len(design.names)
         out.update(S1=nan, S1_conf=nan, ST=nan, ST_conf=nan)
@@ -214,8 +241,13 @@ def sobol_indices(design: Design, y: np.ndarray, seed: int = 0) -> dict[str, Any
 
     with warnings.catch_warnings():  # pandas FutureWarning from inside SALib 1.5
         warnings.simplefilter("ignore", FutureWarning)
-        res = sobol.analyze(design.problem(), blocks[keep].ravel(), calc_second_order=False,
-                            num_resamples=200, seed=seed)
+        res = sobol.analyze(
+            design.problem(),
+            blocks[keep].ravel(),
+            calc_second_order=False,
+            num_resamples=200,
+            seed=seed,
+        )
     for k in ("S1", "S1_conf", "ST", "ST_conf"):
         out[k] = [float(v) for v in res[k]]
     return out
@@ -230,8 +262,11 @@ def driver(ind: dict[str, Any]) -> str | None:
 
 
 def analysis_summary(a: dict[str, Any]) -> dict[str, Any]:
-    return {"thresholds_mm": a["thresholds_mm"], "groups": answer_rows(a),
-            "smallest_p95_peak": a["robust"]}
+    return {
+        "thresholds_mm": a["thresholds_mm"],
+        "groups": answer_rows(a),
+        "smallest_p95_peak": a["robust"],
+    }
 
 
 def _p95(r: dict[str, Any]) -> float:
@@ -246,9 +281,11 @@ def headline(a: dict[str, Any]) -> list[str]:
             continue
         n = grp[best]["stats"]["peak_amplitude_mm"]["n_common"]
         others = ", ".join(f"{d} {_p95(r):.4g} mm" for d, r in grp.items() if d != best)
-        lines.append(f"{fam}: the {best} has the smallest 95th-percentile peak, "
-                     f"{_p95(grp[best]):.4g} mm ({others}; over the {n} samples every damper "
-                     "solved)")
+        lines.append(
+            f"{fam}: the {best} has the smallest 95th-percentile peak, "
+            f"{_p95(grp[best]):.4g} mm ({others}; over the {n} samples every damper "
+            "solved)"
+        )
     for r in a["groups"]:
         st = r["stats"]["peak_amplitude_mm"]
         if "p95" not in st:
@@ -259,7 +296,8 @@ def headline(a: dict[str, Any]) -> list[str]:
             f"{r['damper']}, {r['family']}: peak median {st['p50']:.4g} mm, 95th percentile "
             f"{st['p95']:.4g} mm, P(peak > {r['threshold_mm']:.3g} mm) = "
             f"{pe:.2f}; driven by {r['driver'] or '?'}"
-            + (f" ({r['n_failed']} solves stopped early: left out)" if r["n_failed"] else ""))
+            + (f" ({r['n_failed']} solves stopped early: left out)" if r["n_failed"] else "")
+        )
     return lines
 
 
@@ -272,15 +310,23 @@ def answer_rows(a: dict[str, Any]) -> list[dict[str, Any]]:
             st = r["stats"]["peak_amplitude_mm"]
             ind = r["indices"]["peak_amplitude_mm"]
             j = ind["names"].index(r["driver"]) if r["driver"] else None
-            rows.append({"family": fam, "rank": k + 1, "damper": r["damper"],
-                         "peak_p50_mm": st.get("p50"),
-                         "peak_p95_common_mm": st.get("p95_common"),
-                         "n_common": st.get("n_common"), "peak_p95_mm": st.get("p95"),
-                         "threshold_mm": r["threshold_mm"], "p_exceed": st.get("p_exceed"),
-                         "driver": r["driver"],
-                         "driver_ST": ind["ST"][j] if j is not None else None,
-                         "driver_ST_conf": ind["ST_conf"][j] if j is not None else None,
-                         "failed_solves": r["n_failed"]})
+            rows.append(
+                {
+                    "family": fam,
+                    "rank": k + 1,
+                    "damper": r["damper"],
+                    "peak_p50_mm": st.get("p50"),
+                    "peak_p95_common_mm": st.get("p95_common"),
+                    "n_common": st.get("n_common"),
+                    "peak_p95_mm": st.get("p95"),
+                    "threshold_mm": r["threshold_mm"],
+                    "p_exceed": st.get("p_exceed"),
+                    "driver": r["driver"],
+                    "driver_ST": ind["ST"][j] if j is not None else None,
+                    "driver_ST_conf": ind["ST_conf"][j] if j is not None else None,
+                    "failed_solves": r["n_failed"],
+                }
+            )
     return rows
 
 
@@ -289,10 +335,14 @@ def stats_rows(a: dict[str, Any]) -> list[dict[str, Any]]:
     for r in a["groups"]:
         for q, label, unit in QUANTITIES:
             st = r["stats"][q]
-            rows.append({"damper": r["damper"], "family": r["family"],
-                         "quantity": f"{label}, {unit}",
-                         **{k: (round(v, 6) if isinstance(v, float) else v)
-                            for k, v in st.items()}})
+            rows.append(
+                {
+                    "damper": r["damper"],
+                    "family": r["family"],
+                    "quantity": f"{label}, {unit}",
+                    **{k: (round(v, 6) if isinstance(v, float) else v) for k, v in st.items()},
+                }
+            )
     return rows
 
 
@@ -302,9 +352,17 @@ def index_rows(a: dict[str, Any]) -> list[dict[str, Any]]:
         for q, label, _unit in QUANTITIES:
             ind = r["indices"][q]
             for j, name in enumerate(ind["names"]):
-                rows.append({"damper": r["damper"], "family": r["family"], "quantity": label,
-                             "input": name, "S1": round(ind["S1"][j], 4),
-                             "S1_conf": round(ind["S1_conf"][j], 4),
-                             "ST": round(ind["ST"][j], 4), "ST_conf": round(ind["ST_conf"][j], 4),
-                             "base_points_used": ind["n_used"]})
+                rows.append(
+                    {
+                        "damper": r["damper"],
+                        "family": r["family"],
+                        "quantity": label,
+                        "input": name,
+                        "S1": round(ind["S1"][j], 4),
+                        "S1_conf": round(ind["S1_conf"][j], 4),
+                        "ST": round(ind["ST"][j], 4),
+                        "ST_conf": round(ind["ST_conf"][j], 4),
+                        "base_points_used": ind["n_used"],
+                    }
+                )
     return rows

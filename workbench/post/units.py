@@ -22,8 +22,10 @@ BRANCH_UNITS: dict[str, tuple[str, str]] = {
     "out_amp": ("L", "largest |y(t)| over the period, per output"),
     "out_h1": ("L", "harmonic-1 amplitude per output"),
     "out_harm": ("L", "output harmonics (nh, n_out), Fourier layout of hbm/fourier.py"),
-    "status": ("1", "contact status per pair: 0 stuck, 1 stick-slip, 2 partial separation, "
-                    "3 full separation"),
+    "status": (
+        "1",
+        "contact status per pair: 0 stuck, 1 stick-slip, 2 partial separation, 3 full separation",
+    ),
     "friction_energy": ("J", "friction energy dissipated per cycle, per pair"),
     "x": ("L", "solved harmonic unknowns (layout of hbm/balance.py)"),
     "work_ext": ("J", "work of the excitation per cycle"),
@@ -48,8 +50,9 @@ REDUCED_UNITS: dict[str, tuple[str, str]] = {
 }
 
 
-def annotate(h5: Any, units: dict[str, tuple[str, str]], length_unit: str = "m",
-             prefix: str = "") -> None:
+def annotate(
+    h5: Any, units: dict[str, tuple[str, str]], length_unit: str = "m", prefix: str = ""
+) -> None:
     """Set ``unit`` and ``description`` on every listed dataset present in ``h5``."""
     for name, (unit, text) in units.items():
         key = f"{prefix}{name}"

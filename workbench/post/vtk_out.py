@@ -48,9 +48,11 @@ VTK_QUADRATIC_TETRA = 24
 def _grid(points: np.ndarray, cells: np.ndarray, celltypes: np.ndarray):
     import pyvista as pv
 
-    return pv.UnstructuredGrid(np.asarray(cells, dtype=np.int64).ravel(),
-                               np.asarray(celltypes, dtype=np.uint8),
-                               np.asarray(points, dtype=float))
+    return pv.UnstructuredGrid(
+        np.asarray(cells, dtype=np.int64).ravel(),
+        np.asarray(celltypes, dtype=np.uint8),
+        np.asarray(points, dtype=float),
+    )
 
 
 def write_vtu(
@@ -88,12 +90,16 @@ def write_vtu(
 def write_pvd(path: str | Path, entries: list[tuple[float, str]], comment: str = "") -> Path:
     """A ParaView collection: ``entries`` are ``(timestep, file relative to the PVD)``."""
     path = Path(path)
-    rows = [f'    <DataSet timestep="{t:g}" group="" part="0" file={quoteattr(f)}/>'
-            for t, f in entries]
+    rows = [
+        f'    <DataSet timestep="{t:g}" group="" part="0" file={quoteattr(f)}/>' for t, f in entries
+    ]
     note = f"<!-- {comment.replace('--', '-')} -->\n" if comment else ""
-    text = ('<?xml version="1.0"?>\n' + note +
-            '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
-            "  <Collection>\n" + "\n".join(rows) + "\n  </Collection>\n</VTKFile>\n")
+    text = (
+        '<?xml version="1.0"?>\n'
+        + note
+        + '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+        "  <Collection>\n" + "\n".join(rows) + "\n  </Collection>\n</VTKFile>\n"
+    )
     with atomic_path(path) as tmp:
         tmp.write_text(text)
     return path
@@ -121,12 +127,18 @@ def write_mesh_vtu(msh_path: str | Path, vtu_path: str | Path) -> Path:
                 region.append(np.full(len(c), int(phys[0]) if len(phys) else ent, np.int32))
     c = np.vstack(conn)[:, GMSH_TO_VTK_TET10]
     cells = np.column_stack([np.full(len(c), 10, np.int64), c])
-    return write_vtu(vtu_path, x, cells, np.full(len(c), VTK_QUADRATIC_TETRA, np.uint8),
-                     cell_data={"region": np.concatenate(region)})
+    return write_vtu(
+        vtu_path,
+        x,
+        cells,
+        np.full(len(c), VTK_QUADRATIC_TETRA, np.uint8),
+        cell_data={"region": np.concatenate(region)},
+    )
 
 
-def write_modes(out_dir: str | Path, body: str, shapes, freqs_hz: np.ndarray,
-                labels: list[str] | None = None) -> Path:
+def write_modes(
+    out_dir: str | Path, body: str, shapes, freqs_hz: np.ndarray, labels: list[str] | None = None
+) -> Path:
     """``modes_<body>.pvd`` and one VTU per mode (numbered from 1, frequency in field data).
 
     ``shapes`` is a :class:`workbench.fe.modes.BodyShapes` (P2 points, VTK
@@ -138,14 +150,20 @@ def write_modes(out_dir: str | Path, body: str, shapes, freqs_hz: np.ndarray,
     for k, u in enumerate(shapes.disp):
         f = float(freqs_hz[k]) if k < len(freqs_hz) else float("nan")
         name = f"mode_{k + 1:02d}.vtu"
-        write_vtu(sub / name, shapes.points, shapes.cells, shapes.celltypes,
-                  point_data={"mode_shape": u},
-                  field_data={"mode": k + 1, "freq_hz": f})
+        write_vtu(
+            sub / name,
+            shapes.points,
+            shapes.cells,
+            shapes.celltypes,
+            point_data={"mode_shape": u},
+            field_data={"mode": k + 1, "freq_hz": f},
+        )
         entries.append((k + 1, f"{sub.name}/{name}"))
     comment = "time = mode number; " + ", ".join(
         f"mode {k + 1}: {float(f):.3f} Hz"
         + (f" ({labels[k]})" if labels and k < len(labels) and labels[k] else "")
-        for k, f in enumerate(freqs_hz[: len(entries)]))
+        for k, f in enumerate(freqs_hz[: len(entries)])
+    )
     return write_pvd(out / f"modes_{body}.pvd", entries, comment)
 
 
@@ -179,8 +197,12 @@ def peak_relative_motion(case, system) -> np.ndarray | None:
     return u.reshape(-1, 3)
 
 
-def write_case_peak(path: str | Path, case, rel_pair_frame: np.ndarray | None = None,
-                    frames: np.ndarray | None = None) -> Path:
+def write_case_peak(
+    path: str | Path,
+    case,
+    rel_pair_frame: np.ndarray | None = None,
+    frames: np.ndarray | None = None,
+) -> Path:
     """The contact pairs of one case at its peak as VTU point data (see the module doc)."""
     i = case.peak_index
     n = len(case.points)
@@ -194,9 +216,12 @@ def write_case_peak(path: str | Path, case, rel_pair_frame: np.ndarray | None = 
         pd["rel_disp_cos_mm"] = g.real * 1e3
         pd["rel_disp_sin_mm"] = -g.imag * 1e3
         pd["rel_disp_amp_mm"] = np.abs(rel_pair_frame) * 1e3
-    fd = {"digest48": _digest48(case.digest),
-          "freq_hz": float(case.freq_hz[i]) if i >= 0 else float("nan"),
-          "force_n": float(case.force_n), "n_pairs": n}
+    fd = {
+        "digest48": _digest48(case.digest),
+        "freq_hz": float(case.freq_hz[i]) if i >= 0 else float("nan"),
+        "force_n": float(case.force_n),
+        "n_pairs": n,
+    }
     return write_vtu(path, case.points, point_data=pd, field_data=fd)
 
 
@@ -208,8 +233,10 @@ def has_shape(path: Path, digest: str) -> bool:
         import pyvista as pv
 
         g = pv.read(str(path))
-        return (int(np.atleast_1d(g.field_data["digest48"])[0]) == _digest48(digest)
-                and "rel_disp_amp_mm" in g.point_data)
+        return (
+            int(np.atleast_1d(g.field_data["digest48"])[0]) == _digest48(digest)
+            and "rel_disp_amp_mm" in g.point_data
+        )
     except Exception:  # noqa: BLE001 - an unreadable file is rewritten
         return False
 
@@ -221,8 +248,9 @@ def _digest48(digest: str) -> int:
         return 0
 
 
-def write_study_peaks(results, out: str | Path, prepared: dict[str, Any],
-                      model_of: dict[str, str]) -> list[Path]:
+def write_study_peaks(
+    results, out: str | Path, prepared: dict[str, Any], model_of: dict[str, str]
+) -> list[Path]:
     """``cases/<case>_peak.vtu`` for every case of a study.
 
     ``prepared`` holds the models by model digest and ``model_of`` maps a

@@ -21,12 +21,26 @@ def offscreen_pyvista():
 
 
 STYLE = {
-    "figure.dpi": 110, "savefig.dpi": 110, "axes.grid": True, "grid.alpha": 0.3,
-    "font.size": 10, "legend.fontsize": 8, "figure.autolayout": False,
+    "figure.dpi": 110,
+    "savefig.dpi": 110,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+    "font.size": 10,
+    "legend.fontsize": 8,
+    "figure.autolayout": False,
 }
 
-_SUBPLOTS_ARGS = ("nrows", "ncols", "sharex", "sharey", "squeeze", "width_ratios",
-                  "height_ratios", "subplot_kw", "gridspec_kw")
+_SUBPLOTS_ARGS = (
+    "nrows",
+    "ncols",
+    "sharex",
+    "sharey",
+    "squeeze",
+    "width_ratios",
+    "height_ratios",
+    "subplot_kw",
+    "gridspec_kw",
+)
 
 
 class _Figures:

@@ -108,8 +108,11 @@ def energy_scale(energies) -> tuple[float, float, bool]:
     """(lowest, highest, log) colour range of friction energies (mJ) above the floor."""
     from ..post.tables import energy_floor
 
-    e = np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in energies]) \
-        if len(energies) else np.zeros(0)
+    e = (
+        np.concatenate([np.ravel(np.asarray(v, dtype=float)) for v in energies])
+        if len(energies)
+        else np.zeros(0)
+    )
     e = e[np.isfinite(e)]
     floor = energy_floor(e)
     up = e[e > floor]
@@ -125,13 +128,20 @@ def _heading(case: CaseResult, i: int) -> str:
     f = case.freq_hz[i]
     what = "resonance" if i == case.peak_index else f"point {i}"
     fail = "  (branch failed)" if case.branch.failed else ""
-    return (f"{case.damper}, {case.family}, F = {case.force_n:g} N: {what} at {f:.1f} Hz, "
-            f"amplitude {case.amp_mm[i]:.3g} mm{fail}")
+    return (
+        f"{case.damper}, {case.family}, F = {case.force_n:g} N: {what} at {f:.1f} Hz, "
+        f"amplitude {case.amp_mm[i]:.3g} mm{fail}"
+    )
 
 
-def render_contact_maps(case: CaseResult, geometry_dir: str | Path, out_stem: str | Path, *,
-                        point: int | None = None,
-                        scale: tuple[float, float, bool] | None = None) -> list[Path]:
+def render_contact_maps(
+    case: CaseResult,
+    geometry_dir: str | Path,
+    out_stem: str | Path,
+    *,
+    point: int | None = None,
+    scale: tuple[float, float, bool] | None = None,
+) -> list[Path]:
     """Write ``<out_stem>_status.png`` and ``<out_stem>_energy.png``; return both paths.
 
     ``geometry_dir`` holds the damper's ``damper.msh``; ``point`` is the
@@ -165,10 +175,15 @@ def render_contact_maps(case: CaseResult, geometry_dir: str | Path, out_stem: st
         for s in (0, 1):
             k = np.flatnonzero(side == s)
             if k.size:
-                p.add_point_labels(pts[k[:1]], [f"pair {k[0] + 1} (platform {s + 1})"],
-                                   font_size=13,
-                                   shape_opacity=0.6, point_size=1, always_visible=True,
-                                   show_points=False)
+                p.add_point_labels(
+                    pts[k[:1]],
+                    [f"pair {k[0] + 1} (platform {s + 1})"],
+                    font_size=13,
+                    shape_opacity=0.6,
+                    point_size=1,
+                    always_visible=True,
+                    show_points=False,
+                )
         p.add_axes(line_width=2, viewport=(0.86, 0.0, 1.0, 0.16))
         return p
 
@@ -180,8 +195,13 @@ def render_contact_maps(case: CaseResult, geometry_dir: str | Path, out_stem: st
         if sel.any():
             glyphs = pv.PolyData(pts[sel]).glyph(geom=sphere, scale=False, orient=False)
             p.add_mesh(glyphs, color=STATUS_COLORS[k], lighting=False)
-    p.add_legend([[f"{STATUS_NAMES[k]} ({counts[k]})", STATUS_COLORS[k]] for k in range(4)],
-                 bcolor="white", face="circle", size=(0.28, 0.14), loc="lower left")
+    p.add_legend(
+        [[f"{STATUS_NAMES[k]} ({counts[k]})", STATUS_COLORS[k]] for k in range(4)],
+        bcolor="white",
+        face="circle",
+        size=(0.28, 0.14),
+        loc="lower left",
+    )
     _camera(p, surface)
     status_png = _screenshot(p, out_stem.with_name(out_stem.name + "_status.png"))
 
@@ -200,21 +220,41 @@ def render_contact_maps(case: CaseResult, geometry_dir: str | Path, out_stem: st
         cloud = pv.PolyData(pts[slip])
         cloud["energy_mj"] = np.clip(energy[slip], lo if log_scale else 0.0, hi)
         glyphs = cloud.glyph(geom=sphere, scale=False, orient=False)
-        p.add_mesh(glyphs, scalars="energy_mj", cmap=ENERGY_CMAP, clim=(lo, hi),
-                   log_scale=log_scale, lighting=False,
-                   scalar_bar_args=dict(title="", vertical=False, n_labels=5, fmt="%.1e",
-                                        position_x=0.25, position_y=0.035, width=0.5,
-                                        height=0.08, label_font_size=13))
-        p.add_text(title, position=(int(0.25 * WINDOW[0]), int(0.125 * WINDOW[1])),
-                   font_size=11)
+        p.add_mesh(
+            glyphs,
+            scalars="energy_mj",
+            cmap=ENERGY_CMAP,
+            clim=(lo, hi),
+            log_scale=log_scale,
+            lighting=False,
+            scalar_bar_args=dict(
+                title="",
+                vertical=False,
+                n_labels=5,
+                fmt="%.1e",
+                position_x=0.25,
+                position_y=0.035,
+                width=0.5,
+                height=0.08,
+                label_font_size=13,
+            ),
+        )
+        p.add_text(title, position=(int(0.25 * WINDOW[0]), int(0.125 * WINDOW[1])), font_size=11)
     if n_stuck:
         glyphs = pv.PolyData(pts[~slip]).glyph(geom=sphere, scale=False, orient=False)
         p.add_mesh(glyphs, color=STUCK_COLOR, lighting=False)
-        p.add_legend([[f"{STUCK_TEXT} ({n_stuck}): <= {ENERGY_FLOOR_REL:g} x "
-                       f"{hi:.2g} mJ", STUCK_COLOR]],
-                     bcolor="white", face="circle", size=(0.3, 0.06), loc="upper left")
-    p.add_text(f"total {float(energy[slip].sum()):.3g} mJ per cycle over {energy.size} pairs",
-               font_size=10, position="lower_left")
+        p.add_legend(
+            [[f"{STUCK_TEXT} ({n_stuck}): <= {ENERGY_FLOOR_REL:g} x {hi:.2g} mJ", STUCK_COLOR]],
+            bcolor="white",
+            face="circle",
+            size=(0.3, 0.06),
+            loc="upper left",
+        )
+    p.add_text(
+        f"total {float(energy[slip].sum()):.3g} mJ per cycle over {energy.size} pairs",
+        font_size=10,
+        position="lower_left",
+    )
     _camera(p, surface)
     energy_png = _screenshot(p, out_stem.with_name(out_stem.name + "_energy.png"))
     log.debug("contact maps of %s: %s, %s", case.case_id, status_png, energy_png)

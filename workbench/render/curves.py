@@ -86,8 +86,11 @@ def plot_frf(
         if b.failed:
             ax.plot(f[-1], a[-1], "x", color=col, ms=7)
     name = branches[0].output_names[output] if branches and branches[0].output_names else "output"
-    ylab = f"receptance: {name} amplitude / F ({unit}/N)" if per_level else \
-        f"{name} amplitude ({unit})"
+    ylab = (
+        f"receptance: {name} amplitude / F ({unit}/N)"
+        if per_level
+        else f"{name} amplitude ({unit})"
+    )
     if log and any(b.n_points for b in branches):
         ax.set_yscale("log")
         readable_log(ax, "y")
@@ -100,9 +103,11 @@ def plot_frf(
         from matplotlib.lines import Line2D
 
         handles, labels = ax.get_legend_handles_labels()
-        handles += [Line2D([], [], color="0.3", ls="--", label="unstable (Hill)"),
-                    Line2D([], [], color="0.55", ls=":", lw=1.8, label="stability unknown"),
-                    Line2D([], [], color="0.3", ls="none", marker="o", label="peak")]
+        handles += [
+            Line2D([], [], color="0.3", ls="--", label="unstable (Hill)"),
+            Line2D([], [], color="0.55", ls=":", lw=1.8, label="stability unknown"),
+            Line2D([], [], color="0.3", ls="none", marker="o", label="peak"),
+        ]
         ax.legend(handles=handles, loc="best", title="excitation force")
     return save_figure(fig, path)
 

@@ -30,15 +30,32 @@ from .common import pyplot, save_figure, styled
 from .study_style import _EXTRA_COLORS, FIGSIZE, force_colors
 
 ERR_FLOOR = 1e-4  # percent
-QUANTITY_TITLES = {"peak_amplitude_mm": "peak amplitude",
-                   "peak_frequency_hz": "resonance frequency",
-                   "friction_energy_mj": "friction energy per cycle",
-                   "worst": "worst of the three"}
-KNOB_COLORS = {"mesh-size": "#1f6fb4", "modes": "#ff7f0e", "harmonics": "#2ca02c",
-               "nt": "#9467bd", "points-per-line": "#8c564b", "rigid-damper": "#e377c2",
-               "base": "#000000", "combined": "#d62728"}
-KNOB_MARKERS = {"mesh-size": "o", "modes": "s", "harmonics": "^", "nt": "v",
-                "points-per-line": "D", "rigid-damper": "P", "base": "*", "combined": "X"}
+QUANTITY_TITLES = {
+    "peak_amplitude_mm": "peak amplitude",
+    "peak_frequency_hz": "resonance frequency",
+    "friction_energy_mj": "friction energy per cycle",
+    "worst": "worst of the three",
+}
+KNOB_COLORS = {
+    "mesh-size": "#1f6fb4",
+    "modes": "#ff7f0e",
+    "harmonics": "#2ca02c",
+    "nt": "#9467bd",
+    "points-per-line": "#8c564b",
+    "rigid-damper": "#e377c2",
+    "base": "#000000",
+    "combined": "#d62728",
+}
+KNOB_MARKERS = {
+    "mesh-size": "o",
+    "modes": "s",
+    "harmonics": "^",
+    "nt": "v",
+    "points-per-line": "D",
+    "rigid-damper": "P",
+    "base": "*",
+    "combined": "X",
+}
 
 
 EDGE_Y = 0.035  # axes fraction of the bottom band of errors below the floor
@@ -62,8 +79,15 @@ def _edge(ax, xs: Sequence[float], **kw) -> None:
     tr = blended_transform_factory(ax.transData, ax.transAxes)
     ax.plot(list(xs), [EDGE_Y] * len(xs), ls="none", transform=tr, clip_on=False, **kw)
     if ax not in _EDGE_LABELLED:
-        ax.text(0.01, 2.2 * EDGE_Y, EDGE_TEXT, transform=ax.transAxes, fontsize=6.5,
-                color="0.35", va="bottom")
+        ax.text(
+            0.01,
+            2.2 * EDGE_Y,
+            EDGE_TEXT,
+            transform=ax.transAxes,
+            fontsize=6.5,
+            color="0.35",
+            va="bottom",
+        )
         _EDGE_LABELLED.add(ax)
 
 
@@ -85,8 +109,9 @@ def _log_axes(ax) -> None:
             ax.set_ylim(lo / (hi / lo) ** 0.15, hi)
         else:
             ax.set_ylim(lo - 0.15 * (hi - lo), hi)
-        ax.plot([0, 1], [2 * EDGE_Y, 2 * EDGE_Y], color="0.6", lw=0.8, ls=":",
-                transform=ax.transAxes)
+        ax.plot(
+            [0, 1], [2 * EDGE_Y, 2 * EDGE_Y], color="0.6", lw=0.8, ls=":", transform=ax.transAxes
+        )
     for axis, lim in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
         if axis.get_scale() != "log":
             continue
@@ -106,8 +131,13 @@ def _force_of(cond: str) -> float:
 
 
 @styled
-def plot_knob(knob: str, levels: Sequence[str], times_s: Sequence[float],
-              errors: dict[str, dict[str, Sequence[float | None]]], path: str | Path) -> Path:
+def plot_knob(
+    knob: str,
+    levels: Sequence[str],
+    times_s: Sequence[float],
+    errors: dict[str, dict[str, Sequence[float | None]]],
+    path: str | Path,
+) -> Path:
     """Error vs time of one knob's levels: ``errors[quantity][condition][level]`` in percent."""
     plt = pyplot()
     qs = list(errors)
@@ -134,20 +164,25 @@ def plot_knob(knob: str, levels: Sequence[str], times_s: Sequence[float],
             ys = [_floor(errors[q][c][i])[0] for c in conds]
             ys = [y for y in ys if y is not None]
             if ys:
-                ax.annotate(lab, (t, max(ys)), textcoords="offset points", xytext=(3, 4),
-                            fontsize=7)
+                ax.annotate(
+                    lab, (t, max(ys)), textcoords="offset points", xytext=(3, 4), fontsize=7
+                )
             else:  # every condition below the floor: label it on the edge
                 from matplotlib.transforms import blended_transform_factory
 
-                ax.annotate(lab, (t, EDGE_Y), textcoords="offset points", xytext=(3, 4),
-                            fontsize=7, xycoords=blended_transform_factory(ax.transData,
-                                                                           ax.transAxes))
+                ax.annotate(
+                    lab,
+                    (t, EDGE_Y),
+                    textcoords="offset points",
+                    xytext=(3, 4),
+                    fontsize=7,
+                    xycoords=blended_transform_factory(ax.transData, ax.transAxes),
+                )
         ax.set_xlabel("compute time of the setting, s")
         ax.set_ylabel(f"{QUANTITY_TITLES.get(q, q)} error, %")
         ax.set_title(QUANTITY_TITLES.get(q, q), fontsize=10)
     axes[0].legend(title="condition", loc="best")
-    fig.suptitle(f"{knob}: error vs compute time (other knobs at the base setting)",
-                 fontsize=11)
+    fig.suptitle(f"{knob}: error vs compute time (other knobs at the base setting)", fontsize=11)
     fig.tight_layout()
     return save_figure(fig, path)
 
@@ -160,9 +195,14 @@ def pareto_indices(times: Sequence[float], errs: Sequence[float | None]) -> list
 
 
 @styled
-def plot_pareto(points: Sequence[dict[str, Any]], path: str | Path, *,
-                tolerance_pct: float | None = None, picked: str | None = None,
-                reference_time_s: float | None = None) -> Path:
+def plot_pareto(
+    points: Sequence[dict[str, Any]],
+    path: str | Path,
+    *,
+    tolerance_pct: float | None = None,
+    picked: str | None = None,
+    reference_time_s: float | None = None,
+) -> Path:
     """All settings: error vs time per quantity and the worst error, with the Pareto fronts.
 
     ``points``: dicts with ``label``, ``group`` (the knob moved, "base" or
@@ -190,32 +230,63 @@ def plot_pareto(points: Sequence[dict[str, Any]], path: str | Path, *,
                     ys.append(y)
             m = KNOB_MARKERS.get(g, "o")
             if xs:
-                ax.scatter(xs, ys, marker=m, s=34, label=g, facecolors=gcol[g],
-                           edgecolors=gcol[g], zorder=3)
-            _edge(ax, low, marker=m, ms=6, mfc="white", mec=gcol[g],
-                  label=None if xs else g)
+                ax.scatter(
+                    xs,
+                    ys,
+                    marker=m,
+                    s=34,
+                    label=g,
+                    facecolors=gcol[g],
+                    edgecolors=gcol[g],
+                    zorder=3,
+                )
+            _edge(ax, low, marker=m, ms=6, mfc="white", mec=gcol[g], label=None if xs else g)
         front = pareto_indices([p["time_s"] for p in points], [p.get(q) for p in points])
         front = [i for i in front if _floor(points[i][q])[0] is not None]
         if front:
             fx = [points[i]["time_s"] for i in front]
             fy = [_floor(points[i][q])[0] for i in front]
-            ax.step(fx, fy, where="post", color="0.2", lw=1.2, ls="--", zorder=2,
-                    label="Pareto front")
+            ax.step(
+                fx, fy, where="post", color="0.2", lw=1.2, ls="--", zorder=2, label="Pareto front"
+            )
             for i in front:
-                ax.annotate(points[i]["label"], (points[i]["time_s"], _floor(points[i][q])[0]),
-                            textcoords="offset points", xytext=(3, -9), fontsize=6.5)
+                ax.annotate(
+                    points[i]["label"],
+                    (points[i]["time_s"], _floor(points[i][q])[0]),
+                    textcoords="offset points",
+                    xytext=(3, -9),
+                    fontsize=6.5,
+                )
         if reference_time_s is not None:
-            ax.axvline(reference_time_s, color="0.45", lw=1.0, ls="-.",
-                       label=f"reference ({reference_time_s:.0f} s)")
+            ax.axvline(
+                reference_time_s,
+                color="0.45",
+                lw=1.0,
+                ls="-.",
+                label=f"reference ({reference_time_s:.0f} s)",
+            )
         if q == "worst" and tolerance_pct is not None:
-            ax.axhline(tolerance_pct, color="#d62728", lw=1.0, ls=":",
-                       label=f"tolerance {tolerance_pct:g} %")
+            ax.axhline(
+                tolerance_pct,
+                color="#d62728",
+                lw=1.0,
+                ls=":",
+                label=f"tolerance {tolerance_pct:g} %",
+            )
         if picked is not None and q == "worst":
             for p in points:
                 y = _floor(p.get(q))[0]
                 if p["label"] == picked and y is not None:
-                    ax.scatter([p["time_s"]], [y], s=180, facecolors="none",
-                               edgecolors="#d62728", lw=1.8, zorder=4, label="picked")
+                    ax.scatter(
+                        [p["time_s"]],
+                        [y],
+                        s=180,
+                        facecolors="none",
+                        edgecolors="#d62728",
+                        lw=1.8,
+                        zorder=4,
+                        label="picked",
+                    )
         _log_axes(ax)
         ax.set_xlabel("compute time of the setting, s")
         ax.set_ylabel(f"{QUANTITY_TITLES[q]} error, %")

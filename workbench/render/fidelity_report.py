@@ -36,8 +36,7 @@ def condition_rows(settings: list[Setting]) -> list[dict[str, Any]]:
     for st in settings:
         for cond, r in st.results.items():
             s = r.summary()
-            row = {"label": st.label, "role": st.role, "condition": cond,
-                   "failed": r.branch.failed}
+            row = {"label": st.label, "role": st.role, "condition": cond, "failed": r.branch.failed}
             for q, _, _ in QUANTITIES:
                 row[q] = s.get(q)
                 row[f"err_{q}_pct"] = st.errors.get(cond, {}).get(q)
@@ -46,154 +45,267 @@ def condition_rows(settings: list[Setting]) -> list[dict[str, Any]]:
     return rows
 
 
-def fidelity_outputs(out: Path, settings: list[Setting], ladders: dict[str, list[Setting]],
-                     ref: Setting, front: list[Setting], summary: dict[str, Any],
-                     conditions: list[tuple[float, float]], tolerance: float | None,
-                     wall_s: float = 0.0,
-                     ) -> tuple[list[str], dict[str, float], list[dict[str, Any]]]:
+def fidelity_outputs(
+    out: Path,
+    settings: list[Setting],
+    ladders: dict[str, list[Setting]],
+    ref: Setting,
+    front: list[Setting],
+    summary: dict[str, Any],
+    conditions: list[tuple[float, float]],
+    tolerance: float | None,
+    wall_s: float = 0.0,
+) -> tuple[list[str], dict[str, float], list[dict[str, Any]]]:
     """Write the tables (CSV, JSON) and charts; return the report's (head, timings, sections)."""
     from .fidelity_figures import plot_knob, plot_pareto
 
     tables, figs = out / "tables", out / "figures"
     rows = summary["settings"]
-    cols = ["label", "role", *KNOBS, "geometry_s", "reduction_s", "assembly_s", "hbm_s",
-            "time_s", "err_peak_amplitude_mm_pct", "err_peak_frequency_hz_pct",
-            "err_friction_energy_mj_pct", "max_error_pct", "on_front", "failed"]
+    cols = [
+        "label",
+        "role",
+        *KNOBS,
+        "geometry_s",
+        "reduction_s",
+        "assembly_s",
+        "hbm_s",
+        "time_s",
+        "err_peak_amplitude_mm_pct",
+        "err_peak_frequency_hz_pct",
+        "err_friction_energy_mj_pct",
+        "max_error_pct",
+        "on_front",
+        "failed",
+    ]
     write_csv(tables / "fidelity_settings.csv", rows, cols)
     write_csv(tables / "fidelity_cases.csv", condition_rows(settings))
     write_json(tables / "fidelity_settings.json", rows)
     by_label = {r["label"]: r for r in rows}
     front_rows = [by_label[s.label] for s in front]
-    write_csv(tables / "fidelity_pareto.csv", front_rows,
-              ["label", "time_s", "max_error_pct", "err_peak_amplitude_mm_pct",
-               "err_peak_frequency_hz_pct", "err_friction_energy_mj_pct"])
+    write_csv(
+        tables / "fidelity_pareto.csv",
+        front_rows,
+        [
+            "label",
+            "time_s",
+            "max_error_pct",
+            "err_peak_amplitude_mm_pct",
+            "err_peak_frequency_hz_pct",
+            "err_friction_energy_mj_pct",
+        ],
+    )
 
     conds = [condition_name(p, f) for p, f in conditions]
     sections = [_setup_section(summary, ref, conds)]
     self_err = ladder_self_errors(ladders)
     for knob, lad in ladders.items():
-        fig = plot_knob(knob, [level_label(knob, s.values[knob]) for s in lad],
-                        [s.time_s for s in lad],
-                        {q: {c: [s.errors.get(c, {}).get(q) for s in lad] for c in conds}
-                         for q, _, _ in QUANTITIES}, figs / f"fidelity_{knob}.png")
+        fig = plot_knob(
+            knob,
+            [level_label(knob, s.values[knob]) for s in lad],
+            [s.time_s for s in lad],
+            {
+                q: {c: [s.errors.get(c, {}).get(q) for s in lad] for c in conds}
+                for q, _, _ in QUANTITIES
+            },
+            figs / f"fidelity_{knob}.png",
+        )
         trows = []
         for s, own in zip(lad, self_err[knob], strict=True):
             r = by_label[s.label]
             for c in conds:
-                trows.append({"level": level_label(knob, s.values[knob]), "condition": c,
-                              **{f"{q} error %": s.errors.get(c, {}).get(q)
-                                 for q, _, _ in QUANTITIES},
-                              "worst error vs the knob's finest level %": own,
-                              "time s": r["time_s"], "failed": "; ".join(s.failed)})
+                trows.append(
+                    {
+                        "level": level_label(knob, s.values[knob]),
+                        "condition": c,
+                        **{f"{q} error %": s.errors.get(c, {}).get(q) for q, _, _ in QUANTITIES},
+                        "worst error vs the knob's finest level %": own,
+                        "time s": r["time_s"],
+                        "failed": "; ".join(s.failed),
+                    }
+                )
         write_csv(tables / f"fidelity_{knob}.csv", trows)
-        sections.append({
-            "id": f"knob-{knob}", "title": f"Knob: {knob}",
-            "text": [f"{knob} moved over {len(lad)} levels, the other knobs at the base "
-                     "setting. Errors relative to the reference, in percent; time is the "
-                     "whole cost of the setting (geometry + reduction + assembly + HBM of "
-                     f"every condition), s. Log-log; errors below {1e-4:g} % are drawn at "
-                     f"{1e-4:g} % (open markers). Against the reference, a one-knob setting "
-                     "also carries the errors of the other knobs at their base levels; the "
-                     "table's last error column compares each level with this knob's own "
-                     "finest level instead (the error this knob alone makes)."],
-            "figures": [{"path": str(fig.relative_to(out)),
-                         "caption": f"error vs compute time when only {knob} changes"}],
-            "tables": [{"path": f"tables/fidelity_{knob}.csv",
-                        "caption": f"{knob}: errors per condition and time"}]})
+        sections.append(
+            {
+                "id": f"knob-{knob}",
+                "title": f"Knob: {knob}",
+                "text": [
+                    f"{knob} moved over {len(lad)} levels, the other knobs at the base "
+                    "setting. Errors relative to the reference, in percent; time is the "
+                    "whole cost of the setting (geometry + reduction + assembly + HBM of "
+                    f"every condition), s. Log-log; errors below {1e-4:g} % are drawn at "
+                    f"{1e-4:g} % (open markers). Against the reference, a one-knob setting "
+                    "also carries the errors of the other knobs at their base levels; the "
+                    "table's last error column compares each level with this knob's own "
+                    "finest level instead (the error this knob alone makes)."
+                ],
+                "figures": [
+                    {
+                        "path": str(fig.relative_to(out)),
+                        "caption": f"error vs compute time when only {knob} changes",
+                    }
+                ],
+                "tables": [
+                    {
+                        "path": f"tables/fidelity_{knob}.csv",
+                        "caption": f"{knob}: errors per condition and time",
+                    }
+                ],
+            }
+        )
     tol = tolerance
     picked = (summary.get("picked") or {}).get("picked")
     cand = [s for s in settings if s.role != "reference"]
     fig = plot_pareto(
-        [{"label": s.label, "group": (s.members[0][0] if s.members else s.role),
-          "time_s": s.time_s, **{q: s.error(q) for q, _, _ in QUANTITIES},
-          "worst": s.error()} for s in cand],
-        figs / "fidelity_pareto.png", tolerance_pct=tol,
-        picked=picked["label"] if picked else None, reference_time_s=ref.time_s)
-    sections.append({
-        "id": "pareto", "title": "All settings and the Pareto front",
-        "text": [f"Every measured setting (one knob moved, the base, and any verified "
-                 f"combination) against its compute time; each panel's line is the Pareto "
-                 f"front of that error (no setting is both cheaper and more accurate). The "
-                 f"last panel is the worst of the three errors over every condition, the "
-                 f"measure the tolerance uses. Front: {', '.join(summary['pareto_front'])}."],
-        "figures": [{"path": str(fig.relative_to(out)), "caption": "error vs time, all knobs"}],
-        "tables": [{"path": "tables/fidelity_pareto.csv", "caption": "the Pareto front "
-                    "(worst error)"},
-                   {"path": "tables/fidelity_settings.csv", "caption": "every setting: "
-                    "knob levels, charged time per stage (s), worst errors (%)"}]})
+        [
+            {
+                "label": s.label,
+                "group": (s.members[0][0] if s.members else s.role),
+                "time_s": s.time_s,
+                **{q: s.error(q) for q, _, _ in QUANTITIES},
+                "worst": s.error(),
+            }
+            for s in cand
+        ],
+        figs / "fidelity_pareto.png",
+        tolerance_pct=tol,
+        picked=picked["label"] if picked else None,
+        reference_time_s=ref.time_s,
+    )
+    sections.append(
+        {
+            "id": "pareto",
+            "title": "All settings and the Pareto front",
+            "text": [
+                f"Every measured setting (one knob moved, the base, and any verified "
+                f"combination) against its compute time; each panel's line is the Pareto "
+                f"front of that error (no setting is both cheaper and more accurate). The "
+                f"last panel is the worst of the three errors over every condition, the "
+                f"measure the tolerance uses. Front: {', '.join(summary['pareto_front'])}."
+            ],
+            "figures": [{"path": str(fig.relative_to(out)), "caption": "error vs time, all knobs"}],
+            "tables": [
+                {"path": "tables/fidelity_pareto.csv", "caption": "the Pareto front (worst error)"},
+                {
+                    "path": "tables/fidelity_settings.csv",
+                    "caption": "every setting: "
+                    "knob levels, charged time per stage (s), worst errors (%)",
+                },
+            ],
+        }
+    )
     sections.append(_pick_section(summary, tol))
     if summary["failures"]:
-        sections.append({"id": "failures", "title": "Failed solves",
-                         "text": ["These cases stopped early; their points are kept, and the "
-                                  "settings they belong to have no error and are never "
-                                  "picked:"] + summary["failures"], "figures": [],
-                         "tables": []})
-    sections.append({"id": "cases", "title": "Every case", "text": [
-        "One row per setting and condition: the peak values and their errors."],
-        "figures": [], "tables": [{"path": "tables/fidelity_cases.csv",
-                                   "caption": "every case"}]})
-    head = [f"{damper_line(summary)}",
-            f"reference: {_kv(summary['reference'])}",
-            f"Pareto front (worst error): {', '.join(summary['pareto_front'])}"]
+        sections.append(
+            {
+                "id": "failures",
+                "title": "Failed solves",
+                "text": [
+                    "These cases stopped early; their points are kept, and the "
+                    "settings they belong to have no error and are never "
+                    "picked:"
+                ]
+                + summary["failures"],
+                "figures": [],
+                "tables": [],
+            }
+        )
+    sections.append(
+        {
+            "id": "cases",
+            "title": "Every case",
+            "text": ["One row per setting and condition: the peak values and their errors."],
+            "figures": [],
+            "tables": [{"path": "tables/fidelity_cases.csv", "caption": "every case"}],
+        }
+    )
+    head = [
+        f"{damper_line(summary)}",
+        f"reference: {_kv(summary['reference'])}",
+        f"Pareto front (worst error): {', '.join(summary['pareto_front'])}",
+    ]
     if summary.get("picked"):
         head.append(summary["picked"]["reason"])
-    timings = {"wall time of this run (before the report)": wall_s,
-               **{f"{s} (charged, summed over the settings)":
-                  sum(x.times.get(s, 0.0) for x in settings) for s in STAGES}}
+    timings = {
+        "wall time of this run (before the report)": wall_s,
+        **{
+            f"{s} (charged, summed over the settings)": sum(x.times.get(s, 0.0) for x in settings)
+            for s in STAGES
+        },
+    }
     return head, timings, sections
 
 
 def damper_line(summary: dict[str, Any]) -> str:
-    return (f"{summary['damper']}: {summary['n_settings']} settings x "
-            f"{len(summary['conditions'])} conditions ({', '.join(summary['conditions'])}); "
-            f"{summary['n_computed']} cases computed, {summary['n_reused']} reused")
+    return (
+        f"{summary['damper']}: {summary['n_settings']} settings x "
+        f"{len(summary['conditions'])} conditions ({', '.join(summary['conditions'])}); "
+        f"{summary['n_computed']} cases computed, {summary['n_reused']} reused"
+    )
 
 
 def _kv(d: dict[str, Any]) -> str:
     return ", ".join(str(v) for v in d.values())  # the level labels name their knob
 
 
-def _setup_section(summary: dict[str, Any], ref: Setting,
-                   conds: list[str]) -> dict[str, Any]:
+def _setup_section(summary: dict[str, Any], ref: Setting, conds: list[str]) -> dict[str, Any]:
     knobs = "; ".join(f"{k}: {', '.join(v)}" for k, v in summary["knobs"].items())
-    return {"id": "setup", "title": "Setup and reference", "text": [
-        damper_line(summary) + ".",
-        f"Base setting: {_kv(summary['base'])}. Levels tried, one knob at a time: {knobs}.",
-        f"Reference (every varied knob at its finest level at once): "
-        f"{_kv(summary['reference'])}; its charged time {ref.time_s:.1f} s.",
-        "Errors: |q - q_ref| / |q_ref| in percent for the peak amplitude (mm), the resonance "
-        "frequency (Hz) and the friction energy per cycle at the peak (mJ), at every "
-        "condition. Times: geometry and reduction are the compute times recorded when those "
-        "stages were built (a stage shared by several settings is charged to each, as a user "
-        "running that setting alone would pay it), assembly and HBM as measured when the "
-        "setting was solved; the machine may have been shared, so times are indicative.",
-    ], "figures": [], "tables": []}
+    return {
+        "id": "setup",
+        "title": "Setup and reference",
+        "text": [
+            damper_line(summary) + ".",
+            f"Base setting: {_kv(summary['base'])}. Levels tried, one knob at a time: {knobs}.",
+            f"Reference (every varied knob at its finest level at once): "
+            f"{_kv(summary['reference'])}; its charged time {ref.time_s:.1f} s.",
+            "Errors: |q - q_ref| / |q_ref| in percent for the peak amplitude (mm), the resonance "
+            "frequency (Hz) and the friction energy per cycle at the peak (mJ), at every "
+            "condition. Times: geometry and reduction are the compute times recorded when those "
+            "stages were built (a stage shared by several settings is charged to each, as a user "
+            "running that setting alone would pay it), assembly and HBM as measured when the "
+            "setting was solved; the machine may have been shared, so times are indicative.",
+        ],
+        "figures": [],
+        "tables": [],
+    }
 
 
 def _pick_section(summary: dict[str, Any], tol: float | None) -> dict[str, Any]:
     if tol is None:
-        return {"id": "pick", "title": "Tolerance pick", "text": [
-            "No tolerance given (run with --tolerance 1% to pick the cheapest setting)."],
-            "figures": [], "tables": []}
+        return {
+            "id": "pick",
+            "title": "Tolerance pick",
+            "text": ["No tolerance given (run with --tolerance 1% to pick the cheapest setting)."],
+            "figures": [],
+            "tables": [],
+        }
     pick = summary["picked"]
     text = [pick["reason"]]
     p = pick.get("picked")
     if p:
-        text.append("Picked: " + ", ".join(p[k] for k in KNOBS) + "; errors: "
-                    f"amplitude {p['err_peak_amplitude_mm_pct']:.3g} %, frequency "
-                    f"{p['err_peak_frequency_hz_pct']:.3g} %, energy "
-                    f"{p['err_friction_energy_mj_pct']:.3g} %; time {p['time_s']:.1f} s.")
+        text.append(
+            "Picked: " + ", ".join(p[k] for k in KNOBS) + "; errors: "
+            f"amplitude {p['err_peak_amplitude_mm_pct']:.3g} %, frequency "
+            f"{p['err_peak_frequency_hz_pct']:.3g} %, energy "
+            f"{p['err_friction_energy_mj_pct']:.3g} %; time {p['time_s']:.1f} s."
+        )
     for c in summary["combinations"]:
         if "label" in c:
             e = c["max_error_pct"]
-            text.append(f"Combination {c['shift'] + 1} (per knob, the coarsest level within "
-                        f"{tol:g} % of that knob's own finest level, {c['shift']} level(s) "
-                        "finer; in brackets that error): "
-                        f"{', '.join(c['levels'].values())}; {c['note']}; measured worst "
-                        f"error {'n/a' if e is None else f'{e:.3g} %'}, "
-                        f"{'meets' if c['meets'] else 'does not meet'} the tolerance; "
-                        f"{c['time_s']:.1f} s.")
+            text.append(
+                f"Combination {c['shift'] + 1} (per knob, the coarsest level within "
+                f"{tol:g} % of that knob's own finest level, {c['shift']} level(s) "
+                "finer; in brackets that error): "
+                f"{', '.join(c['levels'].values())}; {c['note']}; measured worst "
+                f"error {'n/a' if e is None else f'{e:.3g} %'}, "
+                f"{'meets' if c['meets'] else 'does not meet'} the tolerance; "
+                f"{c['time_s']:.1f} s."
+            )
         else:
             text.append(f"Combination: {c['note']}.")
-    return {"id": "pick", "title": f"Tolerance pick ({tol:g} %)", "text": text,
-            "figures": [], "tables": []}
+    return {
+        "id": "pick",
+        "title": f"Tolerance pick ({tol:g} %)",
+        "text": text,
+        "figures": [],
+        "tables": [],
+    }

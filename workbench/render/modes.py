@@ -35,9 +35,11 @@ def _grids(pv, result) -> dict[str, Any]:
     """One surface per body carrying every mode as a point array ``m<k>``."""
     out = {}
     for name, sh in result.shapes.items():
-        grid = pv.UnstructuredGrid(np.asarray(sh.cells, dtype=np.int64),
-                                   np.asarray(sh.celltypes, dtype=np.uint8),
-                                   np.asarray(sh.points, dtype=float))
+        grid = pv.UnstructuredGrid(
+            np.asarray(sh.cells, dtype=np.int64),
+            np.asarray(sh.celltypes, dtype=np.uint8),
+            np.asarray(sh.points, dtype=float),
+        )
         for k in range(sh.disp.shape[0]):
             grid.point_data[f"m{k}"] = sh.disp[k]
         out[name] = grid.extract_surface(nonlinear_subdivision=1, algorithm="dataset_surface")
@@ -50,8 +52,7 @@ def _scale(result, surfs: dict[str, Any], k: int) -> tuple[float, float]:
     The rig sets the scale (its bending is what the picture is about); a
     damper that moves much more than the blades is not drawn flying off.
     """
-    umax = {n: float(np.linalg.norm(s.point_data[f"m{k}"], axis=1).max())
-            for n, s in surfs.items()}
+    umax = {n: float(np.linalg.norm(s.point_data[f"m{k}"], axis=1).max()) for n, s in surfs.items()}
     pts = np.vstack([s.points for s in surfs.values()])
     height = float(np.ptp(pts[:, 2])) or 1.0
     ref = umax.get("rig", 0.0) or max(umax.values())
@@ -73,10 +74,17 @@ def _draw(pv, p, result, surfs: dict[str, Any], k: int, title: str) -> None:
     first = True
     for s in surfs.values():
         p.add_mesh(s, style="wireframe", color=OUTLINE_COLOR, opacity=0.12, line_width=0.5)
-        p.add_mesh(_warped(s, k, factor, umax), scalars=COLOR_TITLE, cmap="viridis",
-                   clim=(0.0, 1.0), smooth_shading=True, show_scalar_bar=first,
-                   scalar_bar_args=dict(title=COLOR_TITLE, vertical=True,
-                                        position_x=0.86, position_y=0.2, height=0.6))
+        p.add_mesh(
+            _warped(s, k, factor, umax),
+            scalars=COLOR_TITLE,
+            cmap="viridis",
+            clim=(0.0, 1.0),
+            smooth_shading=True,
+            show_scalar_bar=first,
+            scalar_bar_args=dict(
+                title=COLOR_TITLE, vertical=True, position_x=0.86, position_y=0.2, height=0.6
+            ),
+        )
         first = False
     p.add_text(title, font_size=10, position="upper_left")
     p.add_text(_scale_text(factor), font_size=9, position="lower_left")
@@ -87,8 +95,7 @@ def _draw(pv, p, result, surfs: dict[str, Any], k: int, title: str) -> None:
 
 
 def _scale_text(factor: float) -> str:
-    return (f"deformation drawn x {factor:.3g} (mass-normalised shape, "
-            "grey wireframe: undeformed)")
+    return f"deformation drawn x {factor:.3g} (mass-normalised shape, grey wireframe: undeformed)"
 
 
 CLOSEUP_MARGIN = 0.5  # the close-up box: the damper's bounds grown by this share of its size
@@ -107,14 +114,29 @@ def _draw_closeup(pv, p, result, surfs: dict[str, Any], k: int) -> None:
     if rig is not None:
         near = _warped(rig, k, factor, umax).clip_box(box, invert=False)
         if near.n_points:
-            p.add_mesh(near, scalars=COLOR_TITLE, cmap="viridis", clim=(0.0, 1.0),
-                       opacity=0.4, show_scalar_bar=False)
+            p.add_mesh(
+                near,
+                scalars=COLOR_TITLE,
+                cmap="viridis",
+                clim=(0.0, 1.0),
+                opacity=0.4,
+                show_scalar_bar=False,
+            )
     p.add_mesh(dmp, style="wireframe", color=OUTLINE_COLOR, opacity=0.25, line_width=0.5)
-    p.add_mesh(_warped(dmp, k, factor, umax), scalars=COLOR_TITLE, cmap="viridis",
-               clim=(0.0, 1.0), smooth_shading=True, show_scalar_bar=False)
-    p.add_text(f"close-up: the {result.damper} damper in its groove (same colours and "
-               "scale; the platforms around it translucent)", font_size=9,
-               position="upper_left")
+    p.add_mesh(
+        _warped(dmp, k, factor, umax),
+        scalars=COLOR_TITLE,
+        cmap="viridis",
+        clim=(0.0, 1.0),
+        smooth_shading=True,
+        show_scalar_bar=False,
+    )
+    p.add_text(
+        f"close-up: the {result.damper} damper in its groove (same colours and "
+        "scale; the platforms around it translucent)",
+        font_size=9,
+        position="upper_left",
+    )
     p.view_xz()
     p.reset_camera(bounds=box)
     p.camera.azimuth = 35.0
@@ -124,8 +146,10 @@ def _draw_closeup(pv, p, result, surfs: dict[str, Any], k: int) -> None:
 
 def _title(result, k: int) -> str:
     label = result.labels[k] if k < len(result.labels) else ""
-    head = f"{result.damper} damper, contact {result.contact}: mode {k + 1}, " \
-           f"{result.freqs_hz[k]:.1f} Hz"
+    head = (
+        f"{result.damper} damper, contact {result.contact}: mode {k + 1}, "
+        f"{result.freqs_hz[k]:.1f} Hz"
+    )
     return head + (f"\n{label}" if label else "")
 
 
@@ -149,8 +173,13 @@ def render_modes(result, out_dir: str | Path, *, modes: list[int] | None = None)
     rows = 2 if closeup else 1
     weights = dict(row_weights=[2, 1]) if closeup else {}
     for k in ks:
-        p = pv.Plotter(off_screen=True, shape=(rows, 1), window_size=(1000, 900 + 450 * closeup),
-                       border=False, **weights)
+        p = pv.Plotter(
+            off_screen=True,
+            shape=(rows, 1),
+            window_size=(1000, 900 + 450 * closeup),
+            border=False,
+            **weights,
+        )
         _draw(pv, p, result, surfs, k, _title(result, k))
         if closeup:
             p.subplot(1, 0)
@@ -158,9 +187,13 @@ def render_modes(result, out_dir: str | Path, *, modes: list[int] | None = None)
         files.append(_shot(p, out / f"mode_{k + 1:02d}.png"))
     pair = [k for k in (result.in_phase, result.out_of_phase) if k is not None]
     if pair:
-        p = pv.Plotter(off_screen=True, shape=(rows, len(pair)),
-                       window_size=(900 * len(pair), 900 + 450 * closeup), border=False,
-                       **weights)
+        p = pv.Plotter(
+            off_screen=True,
+            shape=(rows, len(pair)),
+            window_size=(900 * len(pair), 900 + 450 * closeup),
+            border=False,
+            **weights,
+        )
         for j, k in enumerate(pair):
             p.subplot(0, j)
             _draw(pv, p, result, surfs, k, _title(result, k))

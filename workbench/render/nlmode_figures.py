@@ -93,23 +93,49 @@ def plot_synthesis(
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     colors = plt.cm.viridis(np.linspace(0.05, 0.9, max(len(syntheses), 1)))
     for k, (s, col) in enumerate(zip(syntheses, colors, strict=False)):
-        ax.plot(s.freq_hz, s.out_amp * unit_scale, "-" if s.valid else ":", color=col, lw=1.4,
-                label=f"level {s.level:g}" + ("" if s.valid else " (not valid)"))
-        ax.plot(s.peak_freq_hz, s.peak_amplitude * unit_scale, "o", color=col, ms=4,
-                mfc=col if s.valid else "white")
+        ax.plot(
+            s.freq_hz,
+            s.out_amp * unit_scale,
+            "-" if s.valid else ":",
+            color=col,
+            lw=1.4,
+            label=f"level {s.level:g}" + ("" if s.valid else " (not valid)"),
+        )
+        ax.plot(
+            s.peak_freq_hz,
+            s.peak_amplitude * unit_scale,
+            "o",
+            color=col,
+            ms=4,
+            mfc=col if s.valid else "white",
+        )
         if hbm is not None and k < len(hbm) and hbm[k] is not None and hbm[k].n_points:
             b = hbm[k]
-            ax.plot(b.freq_hz, b.out_amp[:, output] * unit_scale, "--", color="0.45", lw=1.0,
-                    label="full HBM" if k == 0 else None)
+            ax.plot(
+                b.freq_hz,
+                b.out_amp[:, output] * unit_scale,
+                "--",
+                color="0.45",
+                lw=1.0,
+                label="full HBM" if k == 0 else None,
+            )
     if backbone.n_points:
-        ax.plot(backbone.freq_hz, backbone.out_amp[:, output] * unit_scale, "-", color="k",
-                lw=0.8, alpha=0.7, label="backbone")
+        ax.plot(
+            backbone.freq_hz,
+            backbone.out_amp[:, output] * unit_scale,
+            "-",
+            color="k",
+            lw=0.8,
+            alpha=0.7,
+            label="backbone",
+        )
     if band_hz is not None:
         ax.set_xlim(*band_hz)
     top = max([float(np.max(s.out_amp)) for s in syntheses if s.out_amp.size] + [0.0])
     if hbm:
-        top = max([top] + [float(b.out_amp[:, output].max()) for b in hbm
-                           if b is not None and b.n_points])
+        top = max(
+            [top] + [float(b.out_amp[:, output].max()) for b in hbm if b is not None and b.n_points]
+        )
     if top > 0:
         ax.set_ylim(0, 1.1 * top * unit_scale)
     name = backbone.output_names[output] if backbone.output_names else "output"
@@ -130,8 +156,10 @@ def plot_synthesis_errors(rows: Sequence[dict], path: str | Path, title: str = "
     labels = list(dict.fromkeys(r["label"] for r in rows))
     colors = plt.cm.tab10(np.arange(max(len(labels), 1)) % 10)
     for lab, col in zip(labels, colors, strict=False):
-        rs = sorted((r for r in rows if r["label"] == lab and r.get("error_pct") is not None),
-                    key=lambda r: r["force_n"])
+        rs = sorted(
+            (r for r in rows if r["label"] == lab and r.get("error_pct") is not None),
+            key=lambda r: r["force_n"],
+        )
         if not rs:
             continue
         f = [r["force_n"] for r in rs]

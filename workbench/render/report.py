@@ -62,8 +62,9 @@ ul.summary li{margin:3px 0}
 # event, so a headless browser test can check that it really rendered. An
 # image's load event always fires before the document's, so the attribute
 # is there whenever the browser reports the page loaded.
-_FIRST_ONLOAD = ("document.body.setAttribute('data-first-figure',"
-                 "this.naturalWidth+'x'+this.naturalHeight)")
+_FIRST_ONLOAD = (
+    "document.body.setAttribute('data-first-figure',this.naturalWidth+'x'+this.naturalHeight)"
+)
 
 
 def _esc(x: Any) -> str:
@@ -123,8 +124,10 @@ def render_html(manifest: dict[str, Any], root: Path) -> str:
         f"{_esc(manifest.get('created', ''))}</p>",
     ]
     sections = manifest.get("sections", [])
-    nav = [f"<a href='#{_esc(s.get('id', f's{i}'))}'>{_esc(s['title'])}</a>"
-           for i, s in enumerate(sections)]
+    nav = [
+        f"<a href='#{_esc(s.get('id', f's{i}'))}'>{_esc(s['title'])}</a>"
+        for i, s in enumerate(sections)
+    ]
     nav += ["<a href='#inputs'>Inputs</a>", "<a href='#software'>Software and cost</a>"]
     parts.append("<nav>" + "".join(nav) + "</nav>")
     if manifest.get("summary"):
@@ -162,21 +165,29 @@ def render_html(manifest: dict[str, Any], root: Path) -> str:
         from ..post.inputs import used_inputs
 
         try:
-            manifest = dict(manifest, inputs_used=used_inputs(manifest["inputs"],
-                                                              manifest.get("sources", {})))
+            manifest = dict(
+                manifest, inputs_used=used_inputs(manifest["inputs"], manifest.get("sources", {}))
+            )
         except Exception as e:  # noqa: BLE001 - the raw table below is still right
             log.warning("inputs of an older manifest not resolved: %s", e)
     if manifest.get("inputs_used"):
-        parts.append("<p class='sub'>The values every case was computed with (options left "
-                     "unset take the geometry and contact files' values, named in the last "
-                     "column); only the options of this kind of study.</p>")
+        parts.append(
+            "<p class='sub'>The values every case was computed with (options left "
+            "unset take the geometry and contact files' values, named in the last "
+            "column); only the options of this kind of study.</p>"
+        )
         rows = [["option", "value", "unit", "from"]]
-        rows += [[r["option"], _fmt(r["value"]), r.get("unit", ""), r.get("source", "")]
-                 for r in manifest["inputs_used"]]
+        rows += [
+            [r["option"], _fmt(r["value"]), r.get("unit", ""), r.get("source", "")]
+            for r in manifest["inputs_used"]
+        ]
         parts.append(_table_html(rows))
     else:  # a manifest written before the inputs_used list existed
-        parts.append(_kv_table(manifest.get("inputs", {}), ("option", "value", "from"),
-                               manifest.get("sources", {})))
+        parts.append(
+            _kv_table(
+                manifest.get("inputs", {}), ("option", "value", "from"), manifest.get("sources", {})
+            )
+        )
     parts.append("<h2 id='software'>Software and cost</h2><h3>Versions</h3>")
     parts.append(_kv_table(manifest.get("versions", {}), ("package", "version")))
     parts.append("<h3>Compute time of each stage</h3>")
@@ -192,8 +203,9 @@ def write_report(study_dir: str | Path, out: str | Path | None = None) -> Path:
     root = Path(study_dir)
     mpath = root / "manifest.json"
     if not mpath.is_file():
-        raise InputError("DIR", str(root), "a study folder containing manifest.json "
-                         "(written by upd study)")
+        raise InputError(
+            "DIR", str(root), "a study folder containing manifest.json (written by upd study)"
+        )
     manifest = json.loads(mpath.read_text())
     target = Path(out) if out else root / "report.html"
     write_text(target, render_html(manifest, root))

@@ -16,10 +16,23 @@ import numpy as np
 
 from .common import pyplot, save_figure, styled
 
-STATUS_STYLE = {"ok": ("#59a14f", "ok"), "wrong": ("#f28e2b", "wrong answer"),
-                "failed": ("#e15759", "failed")}
-_METHOD_COLORS = ("#1f6fb4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2",
-                  "#17becf", "#7f7f7f", "#bcbd22", "#d62728")
+STATUS_STYLE = {
+    "ok": ("#59a14f", "ok"),
+    "wrong": ("#f28e2b", "wrong answer"),
+    "failed": ("#e15759", "failed"),
+}
+_METHOD_COLORS = (
+    "#1f6fb4",
+    "#ff7f0e",
+    "#2ca02c",
+    "#9467bd",
+    "#8c564b",
+    "#e377c2",
+    "#17becf",
+    "#7f7f7f",
+    "#bcbd22",
+    "#d62728",
+)
 
 
 def _cell_text(c: dict[str, Any]) -> str:
@@ -35,8 +48,9 @@ def _cell_text(c: dict[str, Any]) -> str:
 
 
 @styled
-def plot_failure_map(cells: Sequence[dict[str, Any]], methods: Sequence[str],
-                     cases: Sequence[str], path: str | Path) -> Path:
+def plot_failure_map(
+    cells: Sequence[dict[str, Any]], methods: Sequence[str], cases: Sequence[str], path: str | Path
+) -> Path:
     """Grid of methods (rows) x cases (columns): colour = status, text = iterations and time."""
     from matplotlib.patches import Patch
 
@@ -50,10 +64,18 @@ def plot_failure_map(cells: Sequence[dict[str, Any]], methods: Sequence[str],
             if c is None:
                 continue
             color = STATUS_STYLE[c["status"]][0]
-            ax.add_patch(plt.Rectangle((j, i), 1, 1, facecolor=color, edgecolor="white",
-                                       lw=2, alpha=0.9))
-            ax.text(j + 0.5, i + 0.5, _cell_text(c), ha="center", va="center", fontsize=6.8,
-                    color="black")
+            ax.add_patch(
+                plt.Rectangle((j, i), 1, 1, facecolor=color, edgecolor="white", lw=2, alpha=0.9)
+            )
+            ax.text(
+                j + 0.5,
+                i + 0.5,
+                _cell_text(c),
+                ha="center",
+                va="center",
+                fontsize=6.8,
+                color="black",
+            )
     ax.set_xlim(0, nc)
     ax.set_ylim(nm, 0)
     ax.set_xticks(np.arange(nc) + 0.5)
@@ -80,8 +102,7 @@ def _draw(ax, f, a, stable, color, label, lw=1.2, ls="-"):
 
 
 @styled
-def plot_branches(cells: Sequence[dict[str, Any]], cases: Sequence[str],
-                  path: str | Path) -> Path:
+def plot_branches(cells: Sequence[dict[str, Any]], cases: Sequence[str], path: str | Path) -> Path:
     """One panel per hard case: every method's branch (mm against Hz); failures end with x."""
     plt = pyplot()
     n = len(cases)
@@ -106,8 +127,14 @@ def plot_branches(cells: Sequence[dict[str, Any]], cases: Sequence[str],
     for k in range(n, nrow * ncol):
         axes[k // ncol][k % ncol].set_visible(False)
     h, lab = axes[0][0].get_legend_handles_labels()
-    fig.legend(h, lab, loc="lower center", ncol=min(5, len(lab)) or 1, frameon=False,
-               bbox_to_anchor=(0.5, -0.02 - 0.03 * (len(lab) // 5)))
+    fig.legend(
+        h,
+        lab,
+        loc="lower center",
+        ncol=min(5, len(lab)) or 1,
+        frameon=False,
+        bbox_to_anchor=(0.5, -0.02 - 0.03 * (len(lab) // 5)),
+    )
     fig.tight_layout(rect=(0, 0.06, 1, 1))
     return save_figure(fig, path)
 
@@ -127,19 +154,36 @@ def plot_hbm_vs_time(checks: Sequence[dict[str, Any]], path: str | Path) -> Path
         a = 1e3 * np.asarray(ch["amp"])  # m -> mm
         st = np.asarray(ch["stable"], bool)
         ax.plot(f, np.where(st, a, np.nan), color="#1f6fb4", lw=1.4, label="HBM (stable)")
-        ax.plot(f, np.where(~st, a, np.nan), color="#1f6fb4", lw=1.2, ls="--",
-                label="HBM (Hill-unstable)")
+        ax.plot(
+            f,
+            np.where(~st, a, np.nan),
+            color="#1f6fb4",
+            lw=1.2,
+            ls="--",
+            label="HBM (Hill-unstable)",
+        )
         for r in ch["points"]:
             filled = r["ti_converged"]
-            ax.plot(r["freq_hz"], 1e3 * r["ti_amplitude"], "o", ms=7, mew=1.5, color="#e15759",
-                    mfc="#e15759" if filled else "none")
+            ax.plot(
+                r["freq_hz"],
+                1e3 * r["ti_amplitude"],
+                "o",
+                ms=7,
+                mew=1.5,
+                color="#e15759",
+                mfc="#e15759" if filled else "none",
+            )
             label = f"{r['diff_pct']:+.2g}%"
             near = r.get("diff_nearest_pct")
             if near is not None and abs(near - r["diff_pct"]) > 1e-9:
                 label += f" (nearest {near:+.2g}%)"
-            ax.annotate(label, (r["freq_hz"], 1e3 * r["ti_amplitude"]),
-                        textcoords="offset points",
-                        xytext=(5, 4), fontsize=7)
+            ax.annotate(
+                label,
+                (r["freq_hz"], 1e3 * r["ti_amplitude"]),
+                textcoords="offset points",
+                xytext=(5, 4),
+                fontsize=7,
+            )
         ax.plot([], [], "o", color="#e15759", label="time integration (periodic)")
         ax.plot([], [], "o", color="#e15759", mfc="none", label="time integration (not periodic)")
         ax.set_title(f"{ch['model']} ({ch['n_dofs']} DOFs)", fontsize=9)

@@ -55,16 +55,23 @@ def render_scene(geo: BuiltGeometry, png: str | Path, title: str | None = None) 
     p.subplot(0, 0)
     p.add_mesh(rig, color=RIG_COLOR, **look)
     p.add_mesh(damper, color=DAMPER_COLOR, **look)
-    for name, where, color in (("excitation", geo.excitation_points, EXC_COLOR),
-                               ("response", geo.response_points, RESP_COLOR)):
+    for name, where, color in (
+        ("excitation", geo.excitation_points, EXC_COLOR),
+        ("response", geo.response_points, RESP_COLOR),
+    ):
         for k in range(2):
             out = np.sign(where[k, 0])  # the outer faces look away from x = 0
             start = where[k] + out * np.array([0.035, 0.0, 0.0])
-            p.add_mesh(pv.Arrow(start=start, direction=(-out, 0.0, 0.0), scale=0.035),
-                       color=color)
-        p.add_point_labels(where[:1] + np.array([-0.04, 0.0, 0.012]), [f"{name} (x)"],
-                           text_color=color, font_size=14, shape_opacity=0.0,
-                           show_points=False, always_visible=True)
+            p.add_mesh(pv.Arrow(start=start, direction=(-out, 0.0, 0.0), scale=0.035), color=color)
+        p.add_point_labels(
+            where[:1] + np.array([-0.04, 0.0, 0.012]),
+            [f"{name} (x)"],
+            text_color=color,
+            font_size=14,
+            shape_opacity=0.0,
+            show_points=False,
+            always_visible=True,
+        )
     p.add_text(title or f"rig + {geo.damper} damper", font_size=11, position="upper_edge")
     p.add_axes(line_width=2)
     p.view_vector((-0.6, -1.0, 0.45), viewup=(0.0, 0.0, 1.0))
@@ -79,18 +86,30 @@ def render_scene(geo: BuiltGeometry, png: str | Path, title: str | None = None) 
     p.add_mesh(rig_cut, color=RIG_COLOR, **flat)
     p.add_mesh(dam_cut, color=DAMPER_COLOR, **flat)
     for body in (rig_cut, dam_cut):
-        p.add_mesh(body.extract_feature_edges(boundary_edges=True, feature_edges=False,
-                                              manifold_edges=False, non_manifold_edges=False),
-                   color="#333333", line_width=2)
+        p.add_mesh(
+            body.extract_feature_edges(
+                boundary_edges=True,
+                feature_edges=False,
+                manifold_edges=False,
+                non_manifold_edges=False,
+            ),
+            color="#333333",
+            line_width=2,
+        )
     near = np.abs(pts[:, 1] - y_mid) <= np.abs(pts[:, 1] - y_mid).min() + 1e-9
     for k in range(2):
         sel = pts[near & (side == k)]
         if len(sel):
-            p.add_mesh(pv.PolyData(sel).glyph(geom=pv.Sphere(radius=1.5 * radius), scale=False,
-                                               orient=False), color=SIDE_COLORS[k],
-                       lighting=False)
-    p.add_text(f"section at y = {1e3 * y_mid:.1f} mm, seen along +y", font_size=11,
-               position="upper_edge")
+            p.add_mesh(
+                pv.PolyData(sel).glyph(
+                    geom=pv.Sphere(radius=1.5 * radius), scale=False, orient=False
+                ),
+                color=SIDE_COLORS[k],
+                lighting=False,
+            )
+    p.add_text(
+        f"section at y = {1e3 * y_mid:.1f} mm, seen along +y", font_size=11, position="upper_edge"
+    )
     c = np.array([0.0, y_mid, float(np.mean(pts[:, 2]))])
     p.camera.parallel_projection = True
     p.camera.focal_point = c
@@ -105,14 +124,19 @@ def render_scene(geo: BuiltGeometry, png: str | Path, title: str | None = None) 
     p.add_mesh(damper, color=DAMPER_COLOR, opacity=0.45, **look)
     for k in range(2):
         sel = pts[side == k]
-        p.add_mesh(pv.PolyData(sel).glyph(geom=pv.Sphere(radius=radius), scale=False,
-                                           orient=False),
-                   color=SIDE_COLORS[k], label=f"contact points, platform {k + 1}",
-                   lighting=False)
+        p.add_mesh(
+            pv.PolyData(sel).glyph(geom=pv.Sphere(radius=radius), scale=False, orient=False),
+            color=SIDE_COLORS[k],
+            label=f"contact points, platform {k + 1}",
+            lighting=False,
+        )
     p.add_legend(bcolor="white", face="circle", size=(0.36, 0.09), loc="lower left")
     gap = geo.stats.get("max_pair_gap_m", float("nan"))
-    p.add_text(f"{geo.contact.n_pairs} contact pairs, largest pair gap {gap:.1e} m",
-               font_size=11, position="upper_edge")
+    p.add_text(
+        f"{geo.contact.n_pairs} contact pairs, largest pair gap {gap:.1e} m",
+        font_size=11,
+        position="upper_edge",
+    )
     c = np.asarray(geo.damper_centroid, dtype=float)
     span = max(float(np.ptp(pts[:, 1])), groove)
     p.camera.focal_point = c

@@ -19,8 +19,9 @@ import numpy as np
 from .common import pyplot, save_figure, styled
 
 
-def design_rule_points(cases: Sequence[Any], screen_rows: Sequence[dict[str, Any]]
-                       ) -> list[dict[str, Any]]:
+def design_rule_points(
+    cases: Sequence[Any], screen_rows: Sequence[dict[str, Any]]
+) -> list[dict[str, Any]]:
     """One record per (damper, family, variant) with both the screen and the nonlinear numbers.
 
     ``cases``: the study's CaseResults; ``screen_rows``: its screen rows
@@ -35,12 +36,24 @@ def design_rule_points(cases: Sequence[Any], screen_rows: Sequence[dict[str, Any
     f_ref = min(forces[:-1], key=lambda f: abs(f - 0.32 * f_max))
     out = []
     for row in screen_rows:
-        sel = [c for c in cases if c.damper == row["damper"] and c.variant == row["variant"]
-               and abs(c.phase_deg - row["phase_deg"]) < 1e-9]
+        sel = [
+            c
+            for c in cases
+            if c.damper == row["damper"]
+            and c.variant == row["variant"]
+            and abs(c.phase_deg - row["phase_deg"]) < 1e-9
+        ]
         by_f = {float(c.force_n): c for c in sel}
         rec = dict(row)
-        rec.update({"f_ref_n": f_ref, "f_top_n": f_max, "growth_nl": None, "energy_mj": None,
-                    "peak_top_mm": None})
+        rec.update(
+            {
+                "f_ref_n": f_ref,
+                "f_top_n": f_max,
+                "growth_nl": None,
+                "energy_mj": None,
+                "peak_top_mm": None,
+            }
+        )
         top, ref = by_f.get(f_max), by_f.get(f_ref)
         if top is not None and ref is not None and _reached(top) and _reached(ref):
             a_top = top.summary()["peak_amplitude_mm"]
@@ -60,8 +73,9 @@ def _reached(case: Any) -> bool:
 
 
 @styled
-def plot_design_rule(points: Sequence[dict[str, Any]], path: str | Path | None, *,
-                     title: str = "") -> Any:
+def plot_design_rule(
+    points: Sequence[dict[str, Any]], path: str | Path | None, *, title: str = ""
+) -> Any:
     """Peak growth and friction energy against k2/k and the predicted saturation force.
 
     Writes a PNG at ``path`` (or returns the Figure when ``path`` is None)."""
@@ -99,10 +113,12 @@ def plot_design_rule(points: Sequence[dict[str, Any]], path: str | Path | None, 
         ax.axhline(1.3, color="0.4", lw=0.8, ls=":")
         ax.axhline(ratio, color="0.6", lw=0.8, ls="-.")
         tr = ax.get_yaxis_transform()  # x in axes fraction, y in data
-        ax.text(0.01, 1.3, "levels off (<= 1.3)", va="bottom", fontsize=8, color="0.3",
-                transform=tr)
-        ax.text(0.01, ratio, f"linear ({ratio:.3g})", va="bottom", fontsize=8, color="0.4",
-                transform=tr)
+        ax.text(
+            0.01, 1.3, "levels off (<= 1.3)", va="bottom", fontsize=8, color="0.3", transform=tr
+        )
+        ax.text(
+            0.01, ratio, f"linear ({ratio:.3g})", va="bottom", fontsize=8, color="0.4", transform=tr
+        )
         ax.set_ylabel(f"peak growth A({f_top:g} N) / A({f_ref:g} N)")
     k_all = np.array([p["k2_over_k"] for p in points if p["k2_over_k"] > 0])
     log_k = k_all.size > 1 and k_all.max() / k_all.min() > 20
@@ -111,8 +127,15 @@ def plot_design_rule(points: Sequence[dict[str, Any]], path: str | Path | None, 
             ax.set_xscale("log")
     klab = "k2/k from the coupling screen (-" + (", log)" if log_k else ")")
     if seps:
-        axes[0].plot([], [], "s", ms=11, mfc="none", color="0.35",
-                     label=f"a pair lifts off below {f_top:g} N (linear estimate)")
+        axes[0].plot(
+            [],
+            [],
+            "s",
+            ms=11,
+            mfc="none",
+            color="0.35",
+            label=f"a pair lifts off below {f_top:g} N (linear estimate)",
+        )
     axes[0].set_xlabel(klab)
     axes[0].set_title("peak growth vs stuck coupling")
     axes[1].set_xlabel(klab)

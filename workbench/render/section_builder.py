@@ -26,10 +26,24 @@ log = logging.getLogger(__name__)
 
 FIGURES, TABLES = "figures", "tables"
 # figure file names the sections write (anything else in figures/ is shown as found)
-OWN_PREFIXES = ("receptance_", "peak_amplitude_", "friction_energy_", "status_map_",
-                "status_shares_", "contact_", "sweep_")
-OWN_TABLE_PREFIXES = ("peak_amplitude_", "peak_frequency_", "friction_energy_",
-                      "status_shares_", "sweep_", "cases.", "screen.")
+OWN_PREFIXES = (
+    "receptance_",
+    "peak_amplitude_",
+    "friction_energy_",
+    "status_map_",
+    "status_shares_",
+    "contact_",
+    "sweep_",
+)
+OWN_TABLE_PREFIXES = (
+    "peak_amplitude_",
+    "peak_frequency_",
+    "friction_energy_",
+    "status_shares_",
+    "sweep_",
+    "cases.",
+    "screen.",
+)
 
 
 @dataclass
@@ -41,8 +55,13 @@ class _Section:
     tables: list[dict[str, str]] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
-        return {"id": self.id, "title": self.title, "text": self.text,
-                "figures": self.figures, "tables": self.tables}
+        return {
+            "id": self.id,
+            "title": self.title,
+            "text": self.text,
+            "figures": self.figures,
+            "tables": self.tables,
+        }
 
 
 @dataclass
@@ -70,8 +89,7 @@ class _Builder:
         self.sections.append(s)
         return s
 
-    def figure(self, sec: _Section, name: str, caption: str,
-               draw: Callable[[Path], Any]) -> None:
+    def figure(self, sec: _Section, name: str, caption: str, draw: Callable[[Path], Any]) -> None:
         path = self.fig_dir / f"{name}.png"
         entry = {"path": f"{FIGURES}/{name}.png", "caption": caption}
         sec.figures.append(entry)
@@ -80,8 +98,12 @@ class _Builder:
     def table(self, sec: _Section, name: str, table: Table, caption: str) -> None:
         for path in table.write(self.tab_dir / name):
             self.written.add(path.name)
-        sec.tables.append({"path": f"{TABLES}/{name}.csv",
-                           "caption": f"{caption} (also as markdown: {TABLES}/{name}.md)"})
+        sec.tables.append(
+            {
+                "path": f"{TABLES}/{name}.csv",
+                "caption": f"{caption} (also as markdown: {TABLES}/{name}.md)",
+            }
+        )
 
     def run(self) -> None:
         for job in progress(self.jobs, desc="study figures", total=len(self.jobs), unit="fig"):
@@ -134,5 +156,7 @@ def _peak_sentence(cases: Sequence[CaseResult]) -> str:
         return f"{pc.damper}: peak {first}"
     last = f"{pc.amp_mm[b]:.3g} mm at {pc.freq_hz[b]:.1f} Hz ({pc.force_n[b]:g} N)"
     ratio = (pc.amp_mm[b] / pc.force_n[b]) / (pc.amp_mm[a] / pc.force_n[a])
-    return (f"{pc.damper}: peak {first} to {last}; peak receptance at the highest force over "
-            f"that at the lowest {ratio:.3g} (1 for a linear response)")
+    return (
+        f"{pc.damper}: peak {first} to {last}; peak receptance at the highest force over "
+        f"that at the lowest {ratio:.3g} (1 for a linear response)"
+    )

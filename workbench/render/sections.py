@@ -101,107 +101,167 @@ def _receptances(b: _Builder, variant: str) -> None:
         if not cases:
             continue
         dampers = list(dict.fromkeys(c.damper for c in cases))
-        sec = b.section(f"receptances-{_fam_slug(p)}", f"Receptances, {fam}",
-                        [f"Response amplitude per newton of excitation at the response point "
-                         f"vs excitation frequency, forces {_forces_text(r.forces)}."]
-                        + [_peak_sentence(curve_set(r, d, p, variant)) + "." for d in dampers])
+        sec = b.section(
+            f"receptances-{_fam_slug(p)}",
+            f"Receptances, {fam}",
+            [
+                f"Response amplitude per newton of excitation at the response point "
+                f"vs excitation frequency, forces {_forces_text(r.forces)}."
+            ]
+            + [_peak_sentence(curve_set(r, d, p, variant)) + "." for d in dampers],
+        )
         fs = f"receptance_{_fam_slug(p)}"
         if len(dampers) > 1:
-            styles = ", ".join(f"{d} {_LINE_WORDS.get(sf.damper_style(d)[1], '')}".strip()
-                               for d in dampers)
-            b.figure(sec, f"{fs}_all",
-                     f"{fam}: receptances of every damper and force in one axes ({styles}); "
-                     "unstable parts on a grey band."
-                     + _failures(cases),
-                     lambda path, cs=cases: sf.plot_receptance_overlay(cs, path))
+            styles = ", ".join(
+                f"{d} {_LINE_WORDS.get(sf.damper_style(d)[1], '')}".strip() for d in dampers
+            )
+            b.figure(
+                sec,
+                f"{fs}_all",
+                f"{fam}: receptances of every damper and force in one axes ({styles}); "
+                "unstable parts on a grey band." + _failures(cases),
+                lambda path, cs=cases: sf.plot_receptance_overlay(cs, path),
+            )
         for d in dampers:
             own = curve_set(r, d, p, variant)
-            b.figure(sec, f"{fs}_{slug(d)}",
-                     f"{d} damper, {fam}: receptance |x|/F (mm/N) for every force; stable "
-                     "solid, unstable (Hill) dashed." + _failures(own),
-                     lambda path, cs=own: sf.plot_receptances(cs, path, forces=r.forces))
+            b.figure(
+                sec,
+                f"{fs}_{slug(d)}",
+                f"{d} damper, {fam}: receptance |x|/F (mm/N) for every force; stable "
+                "solid, unstable (Hill) dashed." + _failures(own),
+                lambda path, cs=own: sf.plot_receptances(cs, path, forces=r.forces),
+            )
 
 
 def _peaks_and_energy(b: _Builder, variant: str) -> None:
     r = b.results
-    sec = b.section("peaks", "Peak amplitude vs excitation",
-                    ["Largest response amplitude of each branch against the excitation force, "
-                     "log-log: a damper that does not dissipate (a rolling cylinder) follows "
-                     "the grey line of slope 1; a damper that saturates flattens."])
-    en = b.section("friction-energy", "Friction energy at resonance",
-                   ["Energy dissipated by friction per cycle at the resonance peak of each "
-                    "branch, summed over every contact pair, mJ; one table per family with "
-                    "the dampers in rows and the forces in columns, as in the paper's "
-                    "Tables 1-2. An energy at or below 1e-6 times the largest of its table "
-                    "or figure is round-off of contacts that do not slip: it reads "
-                    "'stuck / 0' in the tables and sits in the 'stuck / 0' strip under "
-                    "the figure's log axis."])
+    sec = b.section(
+        "peaks",
+        "Peak amplitude vs excitation",
+        [
+            "Largest response amplitude of each branch against the excitation force, "
+            "log-log: a damper that does not dissipate (a rolling cylinder) follows "
+            "the grey line of slope 1; a damper that saturates flattens."
+        ],
+    )
+    en = b.section(
+        "friction-energy",
+        "Friction energy at resonance",
+        [
+            "Energy dissipated by friction per cycle at the resonance peak of each "
+            "branch, summed over every contact pair, mJ; one table per family with "
+            "the dampers in rows and the forces in columns, as in the paper's "
+            "Tables 1-2. An energy at or below 1e-6 times the largest of its table "
+            "or figure is round-off of contacts that do not slip: it reads "
+            "'stuck / 0' in the tables and sits in the 'stuck / 0' strip under "
+            "the figure's log axis."
+        ],
+    )
     for p in families(r):
         fam = family_name(p)
         cases = r.select(phase_deg=p, variant=variant)
         if not cases:
             continue
         fsl = _fam_slug(p)
-        b.figure(sec, f"peak_amplitude_{fsl}",
-                 f"{fam}: peak response amplitude (mm) vs excitation force (N), one curve per "
-                 "damper; hollow markers: unstable peak; crosses: failed branch."
-                 + _failures(cases),
-                 lambda path, cs=cases: sf.plot_peak_vs_force(cs, path))
-        b.table(sec, f"peak_amplitude_{fsl}", peak_amplitude_table(r, p, variant),
-                f"{fam}: peak response amplitude, mm")
-        b.table(sec, f"peak_frequency_{fsl}", peak_frequency_table(r, p, variant),
-                f"{fam}: frequency of the peak, Hz")
-        b.table(en, f"friction_energy_{fsl}", energy_table(r, p, variant),
-                f"{fam}: friction energy per cycle at resonance, mJ")
-        b.figure(en, f"friction_energy_{fsl}",
-                 f"{fam}: friction energy per cycle at resonance (mJ, log) vs excitation force "
-                 "(N), one curve per damper." + _failures(cases),
-                 lambda path, cs=cases: sf.plot_energy_vs_force(cs, path))
+        b.figure(
+            sec,
+            f"peak_amplitude_{fsl}",
+            f"{fam}: peak response amplitude (mm) vs excitation force (N), one curve per "
+            "damper; hollow markers: unstable peak; crosses: failed branch." + _failures(cases),
+            lambda path, cs=cases: sf.plot_peak_vs_force(cs, path),
+        )
+        b.table(
+            sec,
+            f"peak_amplitude_{fsl}",
+            peak_amplitude_table(r, p, variant),
+            f"{fam}: peak response amplitude, mm",
+        )
+        b.table(
+            sec,
+            f"peak_frequency_{fsl}",
+            peak_frequency_table(r, p, variant),
+            f"{fam}: frequency of the peak, Hz",
+        )
+        b.table(
+            en,
+            f"friction_energy_{fsl}",
+            energy_table(r, p, variant),
+            f"{fam}: friction energy per cycle at resonance, mJ",
+        )
+        b.figure(
+            en,
+            f"friction_energy_{fsl}",
+            f"{fam}: friction energy per cycle at resonance (mJ, log) vs excitation force "
+            "(N), one curve per damper." + _failures(cases),
+            lambda path, cs=cases: sf.plot_energy_vs_force(cs, path),
+        )
 
 
 def _status(b: _Builder, variant: str) -> None:
     r = b.results
     chosen = pick_forces(r.forces)
-    sec = b.section("contact-status", "Contact status",
-                    [f"Status of every contact pair over one period along each branch at "
-                     f"{_forces_text(chosen)}: pairs of platform 1 (side 0) below the dashed "
-                     "line, platform 2 above; pairs numbered along each line from the "
-                     "damper's large end (cone) or -y (cylinder), row by row for the wedge. "
-                     "Then the share of each status at resonance against the force."])
+    sec = b.section(
+        "contact-status",
+        "Contact status",
+        [
+            f"Status of every contact pair over one period along each branch at "
+            f"{_forces_text(chosen)}: pairs of platform 1 (side 0) below the dashed "
+            "line, platform 2 above; pairs numbered along each line from the "
+            "damper's large end (cone) or -y (cylinder), row by row for the wedge. "
+            "Then the share of each status at resonance against the force."
+        ],
+    )
     for p in families(r):
         fam = family_name(p)
         cases = r.select(phase_deg=p, variant=variant)
         if not cases:
             continue
         for d in dict.fromkeys(c.damper for c in cases):
-            own = [c for c in curve_set(r, d, p, variant)
-                   if any(abs(c.force_n - f) <= 1e-9 * max(1.0, f) for f in chosen)]
+            own = [
+                c
+                for c in curve_set(r, d, p, variant)
+                if any(abs(c.force_n - f) <= 1e-9 * max(1.0, f) for f in chosen)
+            ]
             if not own:
                 continue
-            b.figure(sec, f"status_map_{_fam_slug(p)}_{slug(d)}",
-                     f"{d} damper, {fam}: contact status of every pair vs frequency at "
-                     f"{_forces_text([c.force_n for c in own])} (stuck, stick-slip, partial "
-                     "separation, full separation); dotted red line: resonance peak."
-                     + _failures(own),
-                     lambda path, cs=own: sf.plot_status_map(cs, path))
-        b.figure(sec, f"status_shares_{_fam_slug(p)}",
-                 f"{fam}: share of the contact pairs in each status at resonance vs force; "
-                 "colour: status, line style and marker: damper." + _failures(cases),
-                 lambda path, cs=cases: sf.plot_status_shares(cs, path))
-        b.table(sec, f"status_shares_{_fam_slug(p)}", status_shares_table(r, p, variant),
-                f"{fam}: share of the pairs in each status at resonance, percent")
+            b.figure(
+                sec,
+                f"status_map_{_fam_slug(p)}_{slug(d)}",
+                f"{d} damper, {fam}: contact status of every pair vs frequency at "
+                f"{_forces_text([c.force_n for c in own])} (stuck, stick-slip, partial "
+                "separation, full separation); dotted red line: resonance peak." + _failures(own),
+                lambda path, cs=own: sf.plot_status_map(cs, path),
+            )
+        b.figure(
+            sec,
+            f"status_shares_{_fam_slug(p)}",
+            f"{fam}: share of the contact pairs in each status at resonance vs force; "
+            "colour: status, line style and marker: damper." + _failures(cases),
+            lambda path, cs=cases: sf.plot_status_shares(cs, path),
+        )
+        b.table(
+            sec,
+            f"status_shares_{_fam_slug(p)}",
+            status_shares_table(r, p, variant),
+            f"{fam}: share of the pairs in each status at resonance, percent",
+        )
 
 
 def _contact_maps(b: _Builder, variant: str, geometry_dirs: dict[str, Path]) -> None:
     from .contact_maps import render_contact_maps
 
     r = b.results
-    sec = b.section("contact-maps", "Status and dissipation on the damper",
-                    ["Each contact pair painted at its point on the damper (seen from above "
-                     "the groove, the platforms left out, platform 1's contact at the bottom) "
-                     "at the resonance of the highest force: its status, and its friction "
-                     "energy per cycle in mJ, on one colour scale for every map (grey: "
-                     "stuck / 0, at or below 1e-6 of the largest)."])
+    sec = b.section(
+        "contact-maps",
+        "Status and dissipation on the damper",
+        [
+            "Each contact pair painted at its point on the damper (seen from above "
+            "the groove, the platforms left out, platform 1's contact at the bottom) "
+            "at the resonance of the highest force: its status, and its friction "
+            "energy per cycle in mJ, on one colour scale for every map (grey: "
+            "stuck / 0, at or below 1e-6 of the largest)."
+        ],
+    )
     mapped = []
     for p in families(r):
         for d in dict.fromkeys(c.damper for c in r.select(phase_deg=p, variant=variant)):
@@ -216,17 +276,26 @@ def _contact_maps(b: _Builder, variant: str, geometry_dirs: dict[str, Path]) -> 
         fam = family_name(p)
         stem = b.fig_dir / f"contact_{_fam_slug(p)}_{slug(d)}"
         base = f"{d} damper, {fam}, F = {c.force_n:g} N, at resonance"
-        entries = [{"path": f"{FIGURES}/{stem.name}_status.png",
-                    "caption": f"{base}: contact status of every pair (stuck, stick-slip, "
-                               "partial or full separation) on the damper surface."
-                               + _failures([c])},
-                   {"path": f"{FIGURES}/{stem.name}_energy.png",
-                    "caption": f"{base}: friction energy per cycle of every pair, mJ."
-                               + _failures([c])}]
+        entries = [
+            {
+                "path": f"{FIGURES}/{stem.name}_status.png",
+                "caption": f"{base}: contact status of every pair (stuck, stick-slip, "
+                "partial or full separation) on the damper surface." + _failures([c]),
+            },
+            {
+                "path": f"{FIGURES}/{stem.name}_energy.png",
+                "caption": f"{base}: friction energy per cycle of every pair, mJ." + _failures([c]),
+            },
+        ]
         sec.figures.extend(entries)
-        b.jobs.append(_Job(lambda c=c, g=geometry_dirs[d], s=stem:
-                           render_contact_maps(c, g, s, scale=scale), sec, entries,
-                           optional=True))
+        b.jobs.append(
+            _Job(
+                lambda c=c, g=geometry_dirs[d], s=stem: render_contact_maps(c, g, s, scale=scale),
+                sec,
+                entries,
+                optional=True,
+            )
+        )
 
 
 # ---- sweeps ---------------------------------------------------------------------------
@@ -238,20 +307,29 @@ def _screen(b: _Builder, rows: list[dict[str, Any]]) -> None:
 
     head, body = screen_table(rows)
     f_max = rows[0].get("f_max_n")
-    sec = b.section("screen", "Coupling screen (linear, seconds)", [
-        "How much each damper stiffens each family when it sticks, from the linear stuck "
-        "and sliding limits of the same reduced models: k2/k = 1 - (f_sliding/f_stuck)^2. "
-        "The rig bound is the same with a rigid damper and 1000x stiffer contact, the most "
-        "coupling this rig allows. Slip and separation onset are the excitation per blade "
-        "at which the first pair slips or lifts off in the stuck linear response. A "
-        "single-mode friction model gives the force up to which the peak stays level, "
-        "(4/pi) Q k2/k times the slip onset (Q = 1/(2 damping)), and the predicted growth "
-        f"of the peak from 0.32 Fmax to Fmax (Fmax = {f_max:g} N). A damper whose k2/k is "
-        "a few per cent cannot level a peak off, whatever mu and the centrifugal load. "
-        "These are estimates of the nonlinear curves below, not results: separation, "
-        "several slipping pairs and mode-shape changes are not in them."])
-    b.table(sec, "screen", Table(tuple(head), tuple(tuple(r) for r in body)),
-            "Coupling screen of every damper and family")
+    sec = b.section(
+        "screen",
+        "Coupling screen (linear, seconds)",
+        [
+            "How much each damper stiffens each family when it sticks, from the linear stuck "
+            "and sliding limits of the same reduced models: k2/k = 1 - (f_sliding/f_stuck)^2. "
+            "The rig bound is the same with a rigid damper and 1000x stiffer contact, the most "
+            "coupling this rig allows. Slip and separation onset are the excitation per blade "
+            "at which the first pair slips or lifts off in the stuck linear response. A "
+            "single-mode friction model gives the force up to which the peak stays level, "
+            "(4/pi) Q k2/k times the slip onset (Q = 1/(2 damping)), and the predicted growth "
+            f"of the peak from 0.32 Fmax to Fmax (Fmax = {f_max:g} N). A damper whose k2/k is "
+            "a few per cent cannot level a peak off, whatever mu and the centrifugal load. "
+            "These are estimates of the nonlinear curves below, not results: separation, "
+            "several slipping pairs and mode-shape changes are not in them."
+        ],
+    )
+    b.table(
+        sec,
+        "screen",
+        Table(tuple(head), tuple(tuple(r) for r in body)),
+        "Coupling screen of every damper and family",
+    )
 
 
 # ---- figures found on disk, the cases table -------------------------------------------
@@ -261,16 +339,22 @@ def _mode_caption(stem: str) -> str:
     """'first_bending' -> 'First bending, in-phase and out-of-phase'; 'mode_03' -> 'Mode 3';
     'modes_in-phase' -> 'Mode shape, in-phase'."""
     if stem.startswith(MODEL_PREFIX):
-        return (f"The rig with the {stem[len(MODEL_PREFIX):]} damper seated in the groove; "
-                "contact points marked on both platforms")
+        return (
+            f"The rig with the {stem[len(MODEL_PREFIX) :]} damper seated in the groove; "
+            "contact points marked on both platforms"
+        )
     if stem.startswith("first_bending"):
-        return ("First bending, in-phase and out-of-phase: deformed rig and damper coloured "
-                "by displacement magnitude")
+        return (
+            "First bending, in-phase and out-of-phase: deformed rig and damper coloured "
+            "by displacement magnitude"
+        )
     if stem.startswith(MODES_PREFIX):
-        return (f"First bending with the {stem[len(MODES_PREFIX):].replace('_', ' ')} damper "
-                "stuck, in-phase (left) and out-of-phase (right): deformed shapes coloured by "
-                "displacement magnitude")
-    tail = stem[len("mode_"):]
+        return (
+            f"First bending with the {stem[len(MODES_PREFIX) :].replace('_', ' ')} damper "
+            "stuck, in-phase (left) and out-of-phase (right): deformed shapes coloured by "
+            "displacement magnitude"
+        )
+    tail = stem[len("mode_") :]
     name = f"Mode {int(tail)}" if tail.isdigit() else "Mode " + tail.replace("_", " ")
     return name + ": deformed rig and damper coloured by displacement magnitude"
 
@@ -291,22 +375,30 @@ def _found_files(b: _Builder) -> tuple[_Section | None, _Section | None]:
     other_tables = [p for p in csvs if not p.name.startswith(OWN_TABLE_PREFIXES)]
     mode_sec = other_sec = None
     if modes:
-        mode_sec = _Section("modes", "The model: rig, dampers, first bending modes",
-                            ["Each damper seated in the groove between the two platforms, "
-                             "and the first bending modes of the blades with it stuck: "
-                             "in-phase (the facing platform edges move radially relative to "
-                             "each other) and out-of-phase (they open and close the groove)."])
+        mode_sec = _Section(
+            "modes",
+            "The model: rig, dampers, first bending modes",
+            [
+                "Each damper seated in the groove between the two platforms, "
+                "and the first bending modes of the blades with it stuck: "
+                "in-phase (the facing platform edges move radially relative to "
+                "each other) and out-of-phase (they open and close the groove)."
+            ],
+        )
         for p in modes:
-            mode_sec.figures.append({"path": f"{FIGURES}/{p.name}",
-                                     "caption": _mode_caption(p.stem) + "."})
+            mode_sec.figures.append(
+                {"path": f"{FIGURES}/{p.name}", "caption": _mode_caption(p.stem) + "."}
+            )
     if other or other_tables:
         other_sec = _Section("other-figures", "Other figures and tables")
         for p in other:
-            other_sec.figures.append({"path": f"{FIGURES}/{p.name}",
-                                      "caption": p.stem.replace("_", " ")})
+            other_sec.figures.append(
+                {"path": f"{FIGURES}/{p.name}", "caption": p.stem.replace("_", " ")}
+            )
         for p in other_tables:
-            other_sec.tables.append({"path": f"{TABLES}/{p.name}",
-                                     "caption": p.stem.replace("_", " ")})
+            other_sec.tables.append(
+                {"path": f"{TABLES}/{p.name}", "caption": p.stem.replace("_", " ")}
+            )
     return mode_sec, other_sec
 
 
@@ -318,15 +410,20 @@ def _cases(b: _Builder) -> None:
     text += notes
     text += [f"Peak NOT reached, {c.case_id}: {c.peak_note()}." for c in r.uncovered()]
     sec = b.section("cases", "Cases", text)
-    b.table(sec, "cases", cases_table(r),
-            "Every case: resonance, friction energy, stability, cost and completion")
+    b.table(
+        sec,
+        "cases",
+        cases_table(r),
+        "Every case: resonance, friction energy, stability, cost and completion",
+    )
 
 
 # ---- entry point ----------------------------------------------------------------------
 
 
-def build_sections(results: StudyResults, study_dir: Path, *,
-                   geometry_dirs: dict[str, Path] | None = None) -> list[dict]:
+def build_sections(
+    results: StudyResults, study_dir: Path, *, geometry_dirs: dict[str, Path] | None = None
+) -> list[dict]:
     """Write every figure and table of a study and return the report's ``sections``.
 
     ``study_dir`` is the study folder (figures go to ``figures/``, tables
@@ -354,9 +451,14 @@ def build_sections(results: StudyResults, study_dir: Path, *,
     else:
         variant = base_variant(results)
         if len({c.variant for c in results.cases}) > 1:
-            b.section("variant", "Variant shown",
-                      [f"The figures below show the cases of variant "
-                       f"{variant or '(base settings)'!s}; the table of cases lists all."])
+            b.section(
+                "variant",
+                "Variant shown",
+                [
+                    f"The figures below show the cases of variant "
+                    f"{variant or '(base settings)'!s}; the table of cases lists all."
+                ],
+            )
         _receptances(b, variant)
         _peaks_and_energy(b, variant)
         _status(b, variant)
@@ -367,7 +469,10 @@ def build_sections(results: StudyResults, study_dir: Path, *,
     _cases(b)
     b.run()
     b.remove_stale()
-    log.info("wrote %d figures and %d tables under %s",
-             sum(len(s.figures) for s in b.sections), sum(len(s.tables) for s in b.sections),
-             study_dir)
+    log.info(
+        "wrote %d figures and %d tables under %s",
+        sum(len(s.figures) for s in b.sections),
+        sum(len(s.tables) for s in b.sections),
+        study_dir,
+    )
     return [s.as_dict() for s in b.sections]

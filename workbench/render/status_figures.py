@@ -99,15 +99,32 @@ def _status_panel(ax, case: CaseResult, side_labels: bool = True) -> None:
     X0 = np.repeat(x0, n_pairs)
     X1 = np.repeat(x1, n_pairs)
     Y = np.tile(j, n_pts).astype(float) + 1.0  # pairs numbered from 1, as in the paper
-    verts = np.stack([np.stack([X0, Y - 0.5], 1), np.stack([X1, Y - 0.5], 1),
-                      np.stack([X1, Y + 0.5], 1), np.stack([X0, Y + 0.5], 1)], axis=1)
+    verts = np.stack(
+        [
+            np.stack([X0, Y - 0.5], 1),
+            np.stack([X1, Y - 0.5], 1),
+            np.stack([X1, Y + 0.5], 1),
+            np.stack([X0, Y + 0.5], 1),
+        ],
+        axis=1,
+    )
     colors = np.asarray(STATUS_COLORS)[np.clip(st.reshape(-1).astype(int), 0, 3)]
-    ax.add_collection(PolyCollection(verts, facecolors=colors, edgecolors="none",
-                                     antialiased=False, rasterized=True))
+    ax.add_collection(
+        PolyCollection(
+            verts, facecolors=colors, edgecolors="none", antialiased=False, rasterized=True
+        )
+    )
     lo, hi = _band(case, float(x0.min()), float(x1.max()))
     for g0, g1 in _uncovered(x0, x1, lo, hi):  # no computed point there: say so
-        ax.axvspan(g0, g1, facecolor=NOT_COMPUTED_COLOR, edgecolor=NOT_COMPUTED_EDGE,
-                   hatch="////", lw=0.0, zorder=0.5)
+        ax.axvspan(
+            g0,
+            g1,
+            facecolor=NOT_COMPUTED_COLOR,
+            edgecolor=NOT_COMPUTED_EDGE,
+            hatch="////",
+            lw=0.0,
+            zorder=0.5,
+        )
     ax.set_xlim(lo, hi)
     ax.set_ylim(0.5, n_pairs + 0.5)
     side = np.asarray(case.side)
@@ -115,10 +132,24 @@ def _status_panel(ax, case: CaseResult, side_labels: bool = True) -> None:
     if 0 < n0 < n_pairs:
         ax.axhline(n0 + 0.5, color="k", ls="--", lw=1.3)
     if 0 < n0 < n_pairs and side_labels:
-        ax.text(1.01, (n0 / 2 + 0.5) / n_pairs, "platform 1", transform=ax.transAxes,
-                rotation=90, va="center", fontsize=8)
-        ax.text(1.01, (n0 + (n_pairs - n0) / 2 + 0.5) / n_pairs, "platform 2",
-                transform=ax.transAxes, rotation=90, va="center", fontsize=8)
+        ax.text(
+            1.01,
+            (n0 / 2 + 0.5) / n_pairs,
+            "platform 1",
+            transform=ax.transAxes,
+            rotation=90,
+            va="center",
+            fontsize=8,
+        )
+        ax.text(
+            1.01,
+            (n0 + (n_pairs - n0) / 2 + 0.5) / n_pairs,
+            "platform 2",
+            transform=ax.transAxes,
+            rotation=90,
+            va="center",
+            fontsize=8,
+        )
     i = case.peak_index
     if i >= 0:
         ax.axvline(f[i], color="#c0392b", lw=1.4, ls=":")
@@ -126,8 +157,9 @@ def _status_panel(ax, case: CaseResult, side_labels: bool = True) -> None:
 
 
 @styled
-def plot_status_map(cases: Sequence[CaseResult], path: str | Path, *,
-                    title: str | None = None) -> Path:
+def plot_status_map(
+    cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None
+) -> Path:
     """Contact status of every pair vs frequency for one damper and family (paper Fig. 12).
 
     One panel per case (e.g. 9.6 N and 30 N), pairs on y (side 0 first,
@@ -139,12 +171,20 @@ def plot_status_map(cases: Sequence[CaseResult], path: str | Path, *,
     n = len(cases)
     windows = [status_zoom(c) for c in cases]
     spans = [float(np.ptp(c.freq_hz)) if c.branch.n_points else 0.0 for c in cases]
-    zoom = all(w is not None and s > 0 and (w[1] - w[0]) < ZOOM_MAX_SHARE * s
-               for w, s in zip(windows, spans, strict=True))
+    zoom = all(
+        w is not None and s > 0 and (w[1] - w[0]) < ZOOM_MAX_SHARE * s
+        for w, s in zip(windows, spans, strict=True)
+    )
     rows = 2 if zoom else 1
-    fig, axes = plt.subplots(rows, n, figsize=(3.9 * n + 0.6, 4.6 if rows == 1 else 7.6),
-                             sharey=True, layout="constrained", squeeze=False,
-                             height_ratios=[1, 1.25] if zoom else None)
+    fig, axes = plt.subplots(
+        rows,
+        n,
+        figsize=(3.9 * n + 0.6, 4.6 if rows == 1 else 7.6),
+        sharey=True,
+        layout="constrained",
+        squeeze=False,
+        height_ratios=[1, 1.25] if zoom else None,
+    )
     for k, c in enumerate(cases):
         for row in range(rows):
             ax = axes[row, k]
@@ -153,34 +193,47 @@ def plot_status_map(cases: Sequence[CaseResult], path: str | Path, *,
         i = c.peak_index
         head = f"F = {c.force_n:g} N" + (f", peak at {c.freq_hz[i]:.1f} Hz" if i >= 0 else "")
         if c.branch.failed:
-            head += f"\nbranch failed at {c.freq_hz[-1]:.1f} Hz" if c.branch.n_points else \
-                "\nbranch failed"
+            head += (
+                f"\nbranch failed at {c.freq_hz[-1]:.1f} Hz"
+                if c.branch.n_points
+                else "\nbranch failed"
+            )
         axes[0, k].set_title(head, fontsize=10)
         if zoom:
             w0, w1 = windows[k]
             axes[1, k].set_xlim(w0, w1)
-            axes[1, k].set_title(f"zoom: {w0:.1f}-{w1:.1f} Hz, where pairs slip or open",
-                                 fontsize=9)
-            axes[0, k].axvspan(w0, w1, facecolor="none", edgecolor="#c0392b", lw=1.0,
-                               ls="--", zorder=3)
+            axes[1, k].set_title(
+                f"zoom: {w0:.1f}-{w1:.1f} Hz, where pairs slip or open", fontsize=9
+            )
+            axes[0, k].axvspan(
+                w0, w1, facecolor="none", edgecolor="#c0392b", lw=1.0, ls="--", zorder=3
+            )
     for row in range(rows):
         axes[row, 0].set_ylabel("contact pair number")
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    extra = [Patch(facecolor=NOT_COMPUTED_COLOR, edgecolor=NOT_COMPUTED_EDGE, hatch="////",
-                   label="not computed (no point)"),
-             Line2D([], [], color="#c0392b", ls=":", lw=1.4, label="resonance peak")]
-    fig.legend(handles=status_legend_handles() + extra, loc="outside lower center", ncol=6,
-               frameon=False)
+    extra = [
+        Patch(
+            facecolor=NOT_COMPUTED_COLOR,
+            edgecolor=NOT_COMPUTED_EDGE,
+            hatch="////",
+            label="not computed (no point)",
+        ),
+        Line2D([], [], color="#c0392b", ls=":", lw=1.4, label="resonance peak"),
+    ]
+    fig.legend(
+        handles=status_legend_handles() + extra, loc="outside lower center", ncol=6, frameon=False
+    )
     c0 = cases[0]
     fig.suptitle(title or f"{c0.damper} damper, {c0.family}: contact status of every pair")
     return save_figure(fig, path)
 
 
 @styled
-def plot_status_shares(cases: Sequence[CaseResult], path: str | Path, *,
-                       title: str | None = None) -> Path:
+def plot_status_shares(
+    cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None
+) -> Path:
     """Share of the pairs in each status at resonance vs force (paper Fig. 13).
 
     Colour names the status, line style and marker the damper. Statuses
@@ -207,13 +260,32 @@ def plot_status_shares(cases: Sequence[CaseResult], path: str | Path, *,
     fs = np.array(forces_all)
     if fs.size > 1 and fs.max() / fs.min() > 5:
         ax.set_xscale("log")
-    ax.set(xlabel="excitation force F (N)", ylabel="share of contact pairs at resonance (%)",
-           ylim=(-3, 103), title=title or f"{cases[0].family}: contact status at resonance")
+    ax.set(
+        xlabel="excitation force F (N)",
+        ylabel="share of contact pairs at resonance (%)",
+        ylim=(-3, 103),
+        title=title or f"{cases[0].family}: contact status at resonance",
+    )
     _readable_log(ax, "x")
-    handles = [Line2D([], [], color=STATUS_COLORS[k], lw=2.5,
-                      label=STATUS_NAMES[k] + ("" if seen[k] else " (none)"))
-               for k in range(4)]
-    _side_legends(fig, (handles, "status"),
-                  ([(d, dict(color="0.3", ls=damper_style(d)[1], marker=damper_style(d)[2]))
-                    for d in _dampers(cases)], "damper"))
+    handles = [
+        Line2D(
+            [],
+            [],
+            color=STATUS_COLORS[k],
+            lw=2.5,
+            label=STATUS_NAMES[k] + ("" if seen[k] else " (none)"),
+        )
+        for k in range(4)
+    ]
+    _side_legends(
+        fig,
+        (handles, "status"),
+        (
+            [
+                (d, dict(color="0.3", ls=damper_style(d)[1], marker=damper_style(d)[2]))
+                for d in _dampers(cases)
+            ],
+            "damper",
+        ),
+    )
     return save_figure(fig, path)

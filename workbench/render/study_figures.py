@@ -67,20 +67,42 @@ log = logging.getLogger(__name__)
 
 # the styles, the status and the sweep figures live in study_style.py, status_figures.py and
 # sweep_figures.py; every figure stays importable from here
-__all__ = ["DAMPER_STYLE", "FAMILY_STYLE", "FIGSIZE", "STATUS_COLORS", "UNSTABLE_BAND",
-           "_EXTRA_COLORS", "damper_style", "failure_notes", "force_colors", "option_label",
-           "plot_cone_angle_energy", "plot_energy_vs_force", "plot_peak_vs_force",
-           "plot_receptance_overlay", "plot_receptances", "plot_status_map",
-           "plot_status_shares", "plot_sweep", "plot_sweep_receptances", "status_legend_handles",
-           "status_zoom"]
+__all__ = [
+    "DAMPER_STYLE",
+    "FAMILY_STYLE",
+    "FIGSIZE",
+    "STATUS_COLORS",
+    "UNSTABLE_BAND",
+    "_EXTRA_COLORS",
+    "damper_style",
+    "failure_notes",
+    "force_colors",
+    "option_label",
+    "plot_cone_angle_energy",
+    "plot_energy_vs_force",
+    "plot_peak_vs_force",
+    "plot_receptance_overlay",
+    "plot_receptances",
+    "plot_status_map",
+    "plot_status_shares",
+    "plot_sweep",
+    "plot_sweep_receptances",
+    "status_legend_handles",
+    "status_zoom",
+]
 
 
 # ---- receptances (paper Figs 9-10) ------------------------------------------------------
 
 
 @styled
-def plot_receptances(cases: Sequence[CaseResult], path: str | Path, *,
-                     forces: Sequence[float] | None = None, title: str | None = None) -> Path:
+def plot_receptances(
+    cases: Sequence[CaseResult],
+    path: str | Path,
+    *,
+    forces: Sequence[float] | None = None,
+    title: str | None = None,
+) -> Path:
     """Receptance vs frequency of one damper and one family, every force in one axes.
 
     Colour names the force (``forces``: the study's force list, so colours
@@ -97,8 +119,15 @@ def plot_receptances(cases: Sequence[CaseResult], path: str | Path, *,
         x, y = c.freq_hz, c.receptance_mm_per_n
         col = colors.get(float(c.force_n), "k")
         if x.size:
-            _draw_branch(ax, x, y, c.stable, unknown=c.branch.unknown, color=col,
-                         label=_flabel(c.force_n) + _failed_suffix(c))
+            _draw_branch(
+                ax,
+                x,
+                y,
+                c.stable,
+                unknown=c.branch.unknown,
+                color=col,
+                label=_flabel(c.force_n) + _failed_suffix(c),
+            )
             _mark_failure(ax, c, x, y, col)
             peaks.append(float(np.nanmax(y)))
             any_unstable |= bool(np.any(c.branch.unstable))
@@ -107,8 +136,11 @@ def plot_receptances(cases: Sequence[CaseResult], path: str | Path, *,
     if _wants_log(peaks):
         ax.set_yscale("log")
         _readable_log(ax, "y")
-    ax.set(xlabel="frequency (Hz)", ylabel="receptance |x| / F (mm/N)",
-           title=title or f"{cases[0].damper} damper, {cases[0].family}: receptances")
+    ax.set(
+        xlabel="frequency (Hz)",
+        ylabel="receptance |x| / F (mm/N)",
+        title=title or f"{cases[0].damper} damper, {cases[0].family}: receptances",
+    )
     entries = [("stable", dict(color="0.3", ls="-"))]
     if any_unstable:
         entries.append(("unstable (Hill)", dict(color="0.3", ls="--")))
@@ -119,8 +151,9 @@ def plot_receptances(cases: Sequence[CaseResult], path: str | Path, *,
 
 
 @styled
-def plot_receptance_overlay(cases: Sequence[CaseResult], path: str | Path, *,
-                            title: str | None = None) -> Path:
+def plot_receptance_overlay(
+    cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None
+) -> Path:
     """Every damper's receptances of one family in one axes (the paper's Fig. 9 manner).
 
     Each damper has its own colour and line style (cone solid, cylinder
@@ -140,9 +173,18 @@ def plot_receptance_overlay(cases: Sequence[CaseResult], path: str | Path, *,
             x, y = c.freq_hz, c.receptance_mm_per_n
             if not x.size:
                 continue
-            _draw_branch(ax, x, y, c.stable, unknown=c.branch.unknown, color=col, ls_stable=ls,
-                         band=True, lw=1.4,
-                         label=(d + (" (failed)" if failed else "")) if first else None)
+            _draw_branch(
+                ax,
+                x,
+                y,
+                c.stable,
+                unknown=c.branch.unknown,
+                color=col,
+                ls_stable=ls,
+                band=True,
+                lw=1.4,
+                label=(d + (" (failed)" if failed else "")) if first else None,
+            )
             _mark_failure(ax, c, x, y, col)
             first = False
             peaks.append(float(np.nanmax(y)))
@@ -152,18 +194,25 @@ def plot_receptance_overlay(cases: Sequence[CaseResult], path: str | Path, *,
         _readable_log(ax, "y")
     fam = cases[0].family
     fs = ", ".join(f"{f:g}" for f in sorted({c.force_n for c in cases}))
-    ax.set(xlabel="frequency (Hz)", ylabel="receptance |x| / F (mm/N)",
-           title=title or f"{fam}: receptances of every damper\nF = {fs} N")
+    ax.set(
+        xlabel="frequency (Hz)",
+        ylabel="receptance |x| / F (mm/N)",
+        title=title or f"{fam}: receptances of every damper\nF = {fs} N",
+    )
     band = dict(UNSTABLE_BAND)
     band.pop("zorder")
-    _side_legends(fig, (ax.get_legend_handles_labels()[0], "damper"),
-                  ([("unstable (Hill)", band)] if any_unstable else [], None))
+    _side_legends(
+        fig,
+        (ax.get_legend_handles_labels()[0], "damper"),
+        ([("unstable (Hill)", band)] if any_unstable else [], None),
+    )
     return save_figure(fig, path)
 
 
 @styled
-def plot_sweep_receptances(cases: Sequence[CaseResult], option: str, path: str | Path, *,
-                           title: str | None = None) -> Path:
+def plot_sweep_receptances(
+    cases: Sequence[CaseResult], option: str, path: str | Path, *, title: str | None = None
+) -> Path:
     """Receptances of one damper, family and force, one curve per value of the swept option."""
     cases = _one_set(cases, "cases")
     cases = sorted(cases, key=lambda c: sweep_value(c, option))
@@ -177,16 +226,26 @@ def plot_sweep_receptances(cases: Sequence[CaseResult], option: str, path: str |
         x, y = c.freq_hz, c.receptance_mm_per_n
         if not x.size:
             continue
-        _draw_branch(ax, x, y, c.stable, unknown=c.branch.unknown, color=colors[v],
-                     label=f"{option} = {v:g} {unit}".rstrip() + _failed_suffix(c))
+        _draw_branch(
+            ax,
+            x,
+            y,
+            c.stable,
+            unknown=c.branch.unknown,
+            color=colors[v],
+            label=f"{option} = {v:g} {unit}".rstrip() + _failed_suffix(c),
+        )
         _mark_failure(ax, c, x, y, colors[v])
         peaks.append(float(np.nanmax(y)))
     if _wants_log(peaks):
         ax.set_yscale("log")
         _readable_log(ax, "y")
     c0 = cases[0]
-    ax.set(xlabel="frequency (Hz)", ylabel="receptance |x| / F (mm/N)",
-           title=title or f"{c0.damper}, {c0.family}, F = {c0.force_n:g} N: sweep of {name}")
+    ax.set(
+        xlabel="frequency (Hz)",
+        ylabel="receptance |x| / F (mm/N)",
+        title=title or f"{c0.damper}, {c0.family}, F = {c0.force_n:g} N: sweep of {name}",
+    )
     _side_legends(fig, (ax.get_legend_handles_labels()[0], option))
     return save_figure(fig, path)
 
@@ -206,13 +265,21 @@ def _proportional_guide(ax, forces: np.ndarray, values: np.ndarray) -> None:
         return
     f0, v0 = forces[ok][0], values[ok][0]
     fx = np.array([forces.min(), forces.max()])
-    ax.plot(fx, v0 * fx / f0, color="0.6", lw=1.0, ls=(0, (6, 3)), zorder=0,
-            label="proportional to F (linear)")
+    ax.plot(
+        fx,
+        v0 * fx / f0,
+        color="0.6",
+        lw=1.0,
+        ls=(0, (6, 3)),
+        zorder=0,
+        label="proportional to F (linear)",
+    )
 
 
 @styled
-def plot_peak_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
-                       title: str | None = None) -> Path:
+def plot_peak_vs_force(
+    cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None
+) -> Path:
     """Largest response amplitude vs excitation force, one curve per damper (paper Fig. 11).
 
     Log-log, so a linear response (a rolling cylinder) is a straight line
@@ -226,13 +293,19 @@ def plot_peak_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
     for d, pc in _by_damper(cases):
         col, ls, mk = damper_style(d)
         ok = np.isfinite(pc.amp_mm) & (pc.amp_mm > 0)
-        ax.plot(pc.force_n[ok], pc.amp_mm[ok], color=col, ls=ls, lw=1.8, marker=mk, ms=6,
-                label=d + (" (failed)" if pc.failed.any() else ""))
+        ax.plot(
+            pc.force_n[ok],
+            pc.amp_mm[ok],
+            color=col,
+            ls=ls,
+            lw=1.8,
+            marker=mk,
+            ms=6,
+            label=d + (" (failed)" if pc.failed.any() else ""),
+        )
         bad = ok & ~pc.stable
-        ax.plot(pc.force_n[bad], pc.amp_mm[bad], ls="none", marker=mk, ms=6, mfc="white",
-                mec=col)
-        ax.plot(pc.force_n[ok & pc.failed], pc.amp_mm[ok & pc.failed], "x", color=col, ms=10,
-                mew=2)
+        ax.plot(pc.force_n[bad], pc.amp_mm[bad], ls="none", marker=mk, ms=6, mfc="white", mec=col)
+        ax.plot(pc.force_n[ok & pc.failed], pc.amp_mm[ok & pc.failed], "x", color=col, ms=10, mew=2)
         if ok.any():
             lowest.append((pc.force_n[ok][0], pc.amp_mm[ok][0]))
     forces = np.array(sorted({c.force_n for c in cases}))
@@ -242,16 +315,20 @@ def plot_peak_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
     if forces.size > 1:  # log-log: the linear guide is a line of slope 1 at any force span
         ax.set_xscale("log")
         ax.set_yscale("log")
-    ax.set(xlabel="excitation force F (N)", ylabel="peak response amplitude (mm)",
-           title=title or f"{cases[0].family}: peak amplitude vs excitation")
+    ax.set(
+        xlabel="excitation force F (N)",
+        ylabel="peak response amplitude (mm)",
+        title=title or f"{cases[0].family}: peak amplitude vs excitation",
+    )
     ax.legend(loc="upper left", title="damper")
     _readable_log(ax)
     return save_figure(fig, path)
 
 
 @styled
-def plot_energy_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
-                         title: str | None = None) -> Path:
+def plot_energy_vs_force(
+    cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None
+) -> Path:
     """Friction energy per cycle at resonance vs force, one curve per damper (log y).
 
     The values of the paper's Tables 1-2 as a figure. Energies at or below
@@ -267,12 +344,16 @@ def plot_energy_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
     plt = pyplot()
     curves = list(_by_damper(cases))
     floor = energy_floor(np.concatenate([pc.energy_mj for _, pc in curves]))
-    stuck_any = any((np.isfinite(pc.energy_mj) & (pc.energy_mj <= floor)).any()
-                    for _, pc in curves)
+    stuck_any = any((np.isfinite(pc.energy_mj) & (pc.energy_mj <= floor)).any() for _, pc in curves)
     if stuck_any:
-        fig, (ax, az) = plt.subplots(2, 1, figsize=(FIGSIZE[0], FIGSIZE[1] + 0.5), sharex=True,
-                                     layout="constrained",
-                                     gridspec_kw={"height_ratios": [6, 1 + 0.25 * len(curves)]})
+        fig, (ax, az) = plt.subplots(
+            2,
+            1,
+            figsize=(FIGSIZE[0], FIGSIZE[1] + 0.5),
+            sharex=True,
+            layout="constrained",
+            gridspec_kw={"height_ratios": [6, 1 + 0.25 * len(curves)]},
+        )
     else:
         fig, ax = plt.subplots(figsize=FIGSIZE, layout="constrained")
         az = None
@@ -290,14 +371,24 @@ def plot_energy_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
         ax.plot(pc.force_n[up], e[up], color=col, ls=ls, lw=1.8, marker=mk, ms=6, label=lab)
         ax.plot(pc.force_n[up & pc.failed], e[up & pc.failed], "x", color=col, ms=10, mew=2)
         if az is not None and low.any():
-            az.plot(pc.force_n[low], np.full(int(low.sum()), k), color=col, ls="none",
-                    marker=mk, ms=6, mfc="white", mec=col)
+            az.plot(
+                pc.force_n[low],
+                np.full(int(low.sum()), k),
+                color=col,
+                ls="none",
+                marker=mk,
+                ms=6,
+                mfc="white",
+                mec=col,
+            )
     forces = np.array(sorted({c.force_n for c in cases}))
     ax.set_yscale("log")
     if forces.size > 1 and forces.max() / forces.min() > 5:
         ax.set_xscale("log")
-    ax.set(ylabel="friction energy per cycle at resonance (mJ)",
-           title=title or f"{cases[0].family}: energy dissipated by friction at resonance")
+    ax.set(
+        ylabel="friction energy per cycle at resonance (mJ)",
+        title=title or f"{cases[0].family}: energy dissipated by friction at resonance",
+    )
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="upper left", title="damper")
     _readable_log(ax)
@@ -308,9 +399,14 @@ def plot_energy_vs_force(cases: Sequence[CaseResult], path: str | Path, *,
         az.set_yticks([])
         az.set_ylabel(STUCK_TEXT, rotation=0, ha="right", va="center")
         az.grid(False, axis="y")
-        az.set_title(f"at or below {ENERGY_FLOOR_REL:g} x the largest energy "
-                     f"({floor:.1g} mJ): no slip, round-off only", fontsize=8, loc="left",
-                     color="0.3", pad=3)
+        az.set_title(
+            f"at or below {ENERGY_FLOOR_REL:g} x the largest energy "
+            f"({floor:.1g} mJ): no slip, round-off only",
+            fontsize=8,
+            loc="left",
+            color="0.3",
+            pad=3,
+        )
     return save_figure(fig, path)
 
 
@@ -329,7 +425,8 @@ def failure_notes(cases: Sequence[CaseResult]) -> list[str]:
             last = f"{b.freq_hz[-1]:.1f} Hz" if b.n_points else "its first point"
             why = b.message or "no reason recorded"
             state = "failed" if b.failed else "stopped early"
-            out.append(f"{c.damper}, {c.family}, F = {c.force_n:g} N {state} after "
-                       f"{b.n_points} points (last at {last}): {why}.")
+            out.append(
+                f"{c.damper}, {c.family}, F = {c.force_n:g} N {state} after "
+                f"{b.n_points} points (last at {last}): {why}."
+            )
     return out
-

@@ -61,8 +61,10 @@ def force_colors(forces: Sequence[float]) -> dict[float, str]:
     fs = sorted(set(float(f) for f in forces))
     cmap = matplotlib.colormaps["plasma"]
     n = len(fs)
-    return {f: matplotlib.colors.to_hex(cmap(0.8 * (i / (n - 1) if n > 1 else 0.0)))
-            for i, f in enumerate(fs)}
+    return {
+        f: matplotlib.colors.to_hex(cmap(0.8 * (i / (n - 1) if n > 1 else 0.0)))
+        for i, f in enumerate(fs)
+    }
 
 
 def status_legend_handles(counts: Sequence[int] | None = None) -> list:
@@ -84,10 +86,20 @@ def _failed_suffix(case: CaseResult) -> str:
     return " (failed)" if case.branch.failed else ""
 
 
-def _draw_branch(ax, x: np.ndarray, y: np.ndarray, stable: np.ndarray, *, color: str,
-                 ls_stable: str = "-", ls_unstable: str = "--", lw: float = 1.6,
-                 band: bool = False, label: str | None = None,
-                 unknown: np.ndarray | None = None) -> None:
+def _draw_branch(
+    ax,
+    x: np.ndarray,
+    y: np.ndarray,
+    stable: np.ndarray,
+    *,
+    color: str,
+    ls_stable: str = "-",
+    ls_unstable: str = "--",
+    lw: float = 1.6,
+    band: bool = False,
+    label: str | None = None,
+    unknown: np.ndarray | None = None,
+) -> None:
     """A curve drawn solid where stable and ``ls_unstable`` (or a grey band) where not;
     points of unknown stability (``unknown``, Hill not computed or not trusted) dotted grey."""
     first = True
@@ -101,9 +113,15 @@ def _draw_branch(ax, x: np.ndarray, y: np.ndarray, stable: np.ndarray, *, color:
     for sl, ok in _runs(stable):
         if not ok and band:
             ax.plot(x[sl], y[sl], **UNSTABLE_BAND)
-        ax.plot(x[sl], y[sl], color=color, lw=lw,
-                ls=ls_stable if (ok or band) else ls_unstable,
-                label=label if first else None, zorder=2)
+        ax.plot(
+            x[sl],
+            y[sl],
+            color=color,
+            lw=lw,
+            ls=ls_stable if (ok or band) else ls_unstable,
+            label=label if first else None,
+            zorder=2,
+        )
         first = False
 
 
@@ -112,8 +130,11 @@ def _mark_failure(ax, case: CaseResult, x: np.ndarray, y: np.ndarray, color: str
         ax.plot(x[-1], y[-1], "x", color=color, ms=9, mew=2.2, zorder=4)
 
 
-def _side_legends(fig, first: tuple[list, str | None],
-                  second: tuple[list[tuple[str, dict]], str | None] | None = None) -> None:
+def _side_legends(
+    fig,
+    first: tuple[list, str | None],
+    second: tuple[list[tuple[str, dict]], str | None] | None = None,
+) -> None:
     """Legends outside the axes on the right: ``first`` (handles, title) at the top and,
     below it, ``second`` (line-style entries (label, Line2D keywords), title)."""
     from matplotlib.lines import Line2D
@@ -122,8 +143,11 @@ def _side_legends(fig, first: tuple[list, str | None],
     fig.legend(handles=handles, loc="outside right upper", title=title)
     if second and second[0]:
         entries, title2 = second
-        fig.legend(handles=[Line2D([], [], label=lab, **kw) for lab, kw in entries],
-                   loc="outside right lower", title=title2)
+        fig.legend(
+            handles=[Line2D([], [], label=lab, **kw) for lab, kw in entries],
+            loc="outside right lower",
+            title=title2,
+        )
 
 
 _readable_log = readable_log  # (moved to common: the FRF figures use it too)

@@ -88,8 +88,9 @@ class _Computer:
     def __init__(self, spec: StudySpec, damper: str, out: Path, force: bool):
         self.spec, self.damper, self.out, self.force = spec, damper, out, force
         self.base = spec.as_dict()
-        self.conditions = [(float(p), float(f)) for p, f in
-                           itertools.product(spec.phases, spec.forces)]
+        self.conditions = [
+            (float(p), float(f)) for p, f in itertools.product(spec.phases, spec.forces)
+        ]
         self.case_dir = out / "cache" / "cases"
         self.time_dir = out / "cache" / "fidelity"
         self.case_dir.mkdir(parents=True, exist_ok=True)
@@ -130,12 +131,19 @@ class _Computer:
         fe_dir = self.out / "cache" / "fe"
         t_red = 0.0
         for body in ("rig", "damper"):
-            rm = reduce_body(prep.geometry, body, n_modes=s["modes"],
-                             rigid=bool(s["rigid-damper"]) and body == "damper",
-                             cache_dir=fe_dir)
+            rm = reduce_body(
+                prep.geometry,
+                body,
+                n_modes=s["modes"],
+                rigid=bool(s["rigid-damper"]) and body == "damper",
+                cache_dir=fe_dir,
+            )
             t_red += float(rm.timings.get("total", 0.0))
-        return {"geometry": t_geom, "reduction": t_red,
-                "assembly": float(prep.timings.get("assembly", 0.0))}
+        return {
+            "geometry": t_geom,
+            "reduction": t_red,
+            "assembly": float(prep.timings.get("assembly", 0.0)),
+        }
 
     def solve(self, todo: list[Case], desc: str) -> None:
         """Compute the cases ``todo`` (grouped by model), saving case and time records."""
@@ -151,33 +159,44 @@ class _Computer:
                 if prep is None:
                     self._prepared.clear()  # keep one model in memory at a time
                     log.info("model for %s: geometry, reduction, assembly", c.name)
-                    prep = prepare_model(c, self.out, force=self.force
-                                         and c.model_digest not in self._fresh)
+                    prep = prepare_model(
+                        c, self.out, force=self.force and c.model_digest not in self._fresh
+                    )
                     self._fresh.add(c.model_digest)
                     self._model_stage_times[c.model_digest] = self._model_times(c, prep)
                     self._prepared[c.model_digest] = prep
                     self.n_models_prepared += 1
                 res = solve_case(prep, c)
                 res.save(self.case_dir / f"{c.digest}.h5")
-                times = dict(self._model_stage_times[c.model_digest],
-                             hbm=float(res.timings.get("hbm", 0.0)))
+                times = dict(
+                    self._model_stage_times[c.model_digest], hbm=float(res.timings.get("hbm", 0.0))
+                )
                 write_json(self.time_dir / f"case-{c.digest}.json", times)
                 self._fresh.add(c.digest)
                 self.n_computed += 1
                 if res.branch.failed:
-                    log.warning("case %s stopped early: %s (its %d points are kept)", c.name,
-                                res.branch.message, res.branch.n_points)
+                    log.warning(
+                        "case %s stopped early: %s (its %d points are kept)",
+                        c.name,
+                        res.branch.message,
+                        res.branch.n_points,
+                    )
                 bar.update(1)
                 if not bars_enabled():
-                    log.info("case %d/%d done: %s (%d points, %.1f s)", k + 1, len(order),
-                             c.name, res.branch.n_points, res.timings.get("hbm", 0.0))
+                    log.info(
+                        "case %d/%d done: %s (%d points, %.1f s)",
+                        k + 1,
+                        len(order),
+                        c.name,
+                        res.branch.n_points,
+                        res.timings.get("hbm", 0.0),
+                    )
 
     def load(self, st: Setting) -> None:
         """Fill ``st.results`` and ``st.times`` from the cache (every case must be there)."""
         st.results, st.times = {}, {s: 0.0 for s in STAGES}
         for (p, f), c in zip(self.conditions, self.cases(st), strict=True):
-            st.results[condition_name(p, f)] = CaseResult.load(
-                self.case_dir / f"{c.digest}.h5")
+            st.results[condition_name(p, f)] = CaseResult.load(self.case_dir / f"{c.digest}.h5")
             t = json.loads((self.time_dir / f"case-{c.digest}.json").read_text())
             for s in ("geometry", "reduction", "assembly"):
                 st.times[s] = float(t[s])  # the model's stages: charged once per setting
@@ -188,8 +207,13 @@ class _Computer:
         n_all = len({c.digest for st in settings for c in self.cases(st)})
         self.n_reused += n_all - len(todo)
         if todo:
-            log.info("%s: %d of %d cases to compute (%d cached)", desc, len(todo), n_all,
-                     n_all - len(todo))
+            log.info(
+                "%s: %d of %d cases to compute (%d cached)",
+                desc,
+                len(todo),
+                n_all,
+                n_all - len(todo),
+            )
         self.solve(todo, desc)
         for st in settings:
             self.load(st)
@@ -205,8 +229,11 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     out = Path(out)
     t_start = time.perf_counter()
     if mpi_size() > 1:  # the stage times must be those of one process; cases are not spread
-        raise InputError("mpirun -n", mpi_size(), "1: a fidelity study runs in one process "
-                         "(its times are what one process pays)")
+        raise InputError(
+            "mpirun -n",
+            mpi_size(),
+            "1: a fidelity study runs in one process (its times are what one process pays)",
+        )
     if len(spec.dampers) != 1:
         raise InputError("dampers", spec.dampers, "exactly one damper in a fidelity study")
     damper = spec.dampers[0]
@@ -215,9 +242,14 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     settings, ladders = plan_settings(spec, damper)
     comp = _Computer(spec, damper, out, force)
     ref = next(s for s in settings if s.role == "reference")
-    log.info("fidelity study '%s': %s, %d settings x %d conditions, reference %s", spec.name,
-             damper, len(settings), len(comp.conditions),
-             ", ".join(level_label(k, ref.values[k]) for k in ladders))
+    log.info(
+        "fidelity study '%s': %s, %d settings x %d conditions, reference %s",
+        spec.name,
+        damper,
+        len(settings),
+        len(comp.conditions),
+        ", ".join(level_label(k, ref.values[k]) for k in ladders),
+    )
     comp.run(settings, spec.name)
     for st in settings:
         st.errors = relative_errors(st, ref)
@@ -247,27 +279,36 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
 
     timings = {"total": time.perf_counter() - t_start}
     summary = {
-        "study": spec.name, "kind": "fidelity", "out": str(out),
-        "report": str(out / "report.html"), "damper": damper,
+        "study": spec.name,
+        "kind": "fidelity",
+        "out": str(out),
+        "report": str(out / "report.html"),
+        "damper": damper,
         "conditions": [condition_name(p, f) for p, f in comp.conditions],
         "knobs": {k: [level_label(k, s.values[k]) for s in lad] for k, lad in ladders.items()},
         "knob_self_errors_pct": {
             k: {level_label(k, st.values[k]): e for st, e in zip(lad, errs, strict=True)}
-            for (k, lad), errs in zip(ladders.items(), ladder_self_errors(ladders).values(),
-                                      strict=True)},
+            for (k, lad), errs in zip(
+                ladders.items(), ladder_self_errors(ladders).values(), strict=True
+            )
+        },
         "base": {k: level_label(k, v) for k, v in settings[0].values.items()},
         "reference": {k: level_label(k, v) for k, v in ref.values.items()},
-        "n_settings": len(settings), "n_computed": comp.n_computed, "n_reused": comp.n_reused,
+        "n_settings": len(settings),
+        "n_computed": comp.n_computed,
+        "n_reused": comp.n_reused,
         "n_models_prepared": comp.n_models_prepared,
         "settings": rows,
         "pareto_front": [s.label for s in front],
         "tolerance_pct": spec.tolerance,
-        "picked": pick, "combinations": combos,
+        "picked": pick,
+        "combinations": combos,
         "failures": failures,
     }
     t_post = time.perf_counter()
-    write_fidelity_outputs(spec, out, settings, ladders, ref, front, summary, comp.conditions,
-                           t_post - t_start)
+    write_fidelity_outputs(
+        spec, out, settings, ladders, ref, front, summary, comp.conditions, t_post - t_start
+    )
     timings["post and report"] = time.perf_counter() - t_post
     timings["total"] = time.perf_counter() - t_start
     summary["timings_s"] = {k: round(v, 2) for k, v in timings.items()}
@@ -275,8 +316,13 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     return summary
 
 
-def _tolerance(tol: float, settings: list[Setting], ladders: dict[str, list[Setting]],
-               comp: _Computer, ref: Setting) -> tuple[dict, list[dict], list[Setting]]:
+def _tolerance(
+    tol: float,
+    settings: list[Setting],
+    ladders: dict[str, list[Setting]],
+    comp: _Computer,
+    ref: Setting,
+) -> tuple[dict, list[dict], list[Setting]]:
     """The tolerance pick: verified combinations first, then every measured setting."""
     known = {s.key: s for s in settings}
     extra: list[Setting] = []
@@ -285,42 +331,72 @@ def _tolerance(tol: float, settings: list[Setting], ladders: dict[str, list[Sett
     for shift in range(_MAX_COMBOS):
         prop = propose_combination(ladders, tol, shift, self_err)
         if prop is None:
-            combos.append({"shift": shift, "note": "some knob's levels could not be compared "
-                           "with its finest level (failed solves): no combination proposed"})
+            combos.append(
+                {
+                    "shift": shift,
+                    "note": "some knob's levels could not be compared "
+                    "with its finest level (failed solves): no combination proposed",
+                }
+            )
             break
         vals, why = prop
         full = dict(settings[0].values, **vals)
         key = digest(full, 16)
         if key == ref.key:
-            combos.append({"shift": shift, "label": "reference", "levels": why,
-                           "note": "the combination is the reference itself (every knob needs "
-                           "its finest level): not a candidate, its error is 0 by "
-                           "construction", "time_s": round(ref.time_s, 3),
-                           "max_error_pct": None, "meets": False})
-            log.info("combination %d is the reference itself: nothing cheaper to verify",
-                     shift + 1)
+            combos.append(
+                {
+                    "shift": shift,
+                    "label": "reference",
+                    "levels": why,
+                    "note": "the combination is the reference itself (every knob needs "
+                    "its finest level): not a candidate, its error is 0 by "
+                    "construction",
+                    "time_s": round(ref.time_s, 3),
+                    "max_error_pct": None,
+                    "meets": False,
+                }
+            )
+            log.info("combination %d is the reference itself: nothing cheaper to verify", shift + 1)
             break
         if key in known:
             st = known[key]
             note = f"the combination is the already measured setting '{st.label}'"
         else:
-            st = Setting(f"combined {shift + 1}", full, "combined",
-                         [("combined", ", ".join(why.values()))])
+            st = Setting(
+                f"combined {shift + 1}", full, "combined", [("combined", ", ".join(why.values()))]
+            )
             _check_sampling(full)
             n_before = comp.n_computed
             comp.run([st], f"combination {shift + 1}")
             st.errors = relative_errors(st, ref)
             known[key] = st
             extra.append(st)
-            note = ("computed to verify it" if comp.n_computed > n_before else
-                    "verified by computing it (its cases were found in the cache)")
+            note = (
+                "computed to verify it"
+                if comp.n_computed > n_before
+                else "verified by computing it (its cases were found in the cache)"
+            )
         err = st.error()
         ok = err is not None and err <= tol
-        combos.append({"shift": shift, "label": st.label, "levels": why, "note": note,
-                       "time_s": round(st.time_s, 3), "max_error_pct": err, "meets": ok})
-        log.info("combination %d (%s): %s; measured worst error %s -> %s", shift + 1,
-                 ", ".join(why.values()), note, "n/a" if err is None else f"{err:.3g} %",
-                 "meets the tolerance" if ok else "does NOT meet it")
+        combos.append(
+            {
+                "shift": shift,
+                "label": st.label,
+                "levels": why,
+                "note": note,
+                "time_s": round(st.time_s, 3),
+                "max_error_pct": err,
+                "meets": ok,
+            }
+        )
+        log.info(
+            "combination %d (%s): %s; measured worst error %s -> %s",
+            shift + 1,
+            ", ".join(why.values()),
+            note,
+            "n/a" if err is None else f"{err:.3g} %",
+            "meets the tolerance" if ok else "does NOT meet it",
+        )
         if ok or all(st.values[k] == lad[-1].values[k] for k, lad in ladders.items()):
             break
     rows = [setting_row(s) for s in list(settings) + extra if s.role != "reference"]
@@ -330,19 +406,28 @@ def _tolerance(tol: float, settings: list[Setting], ladders: dict[str, list[Sett
         pick["reason"] += " (a combination of per-knob levels, verified by computing it)"
     tried = [c for c in combos if c.get("label") not in (None, "reference")]
     if tried and not any(c["meets"] for c in tried):
-        pick["reason"] += (f"; none of the {len(tried)} verified combination(s) met the "
-                           "tolerance, so the pick is a one-knob setting (or none)")
+        pick["reason"] += (
+            f"; none of the {len(tried)} verified combination(s) met the "
+            "tolerance, so the pick is a one-knob setting (or none)"
+        )
     return pick, combos, extra
 
 
 def _log_pick(pick: dict[str, Any], tol: float) -> None:
     if pick["met"]:
         p = pick["picked"]
-        log.info("tolerance %g %%: picked '%s' = %s; errors: amplitude %.3g %%, frequency "
-                 "%.3g %%, energy %.3g %%; time %.1f s. Why: %s", tol, p["label"],
-                 ", ".join(p[k] for k in KNOBS), p["err_peak_amplitude_mm_pct"],
-                 p["err_peak_frequency_hz_pct"], p["err_friction_energy_mj_pct"], p["time_s"],
-                 pick["reason"])
+        log.info(
+            "tolerance %g %%: picked '%s' = %s; errors: amplitude %.3g %%, frequency "
+            "%.3g %%, energy %.3g %%; time %.1f s. Why: %s",
+            tol,
+            p["label"],
+            ", ".join(p[k] for k in KNOBS),
+            p["err_peak_amplitude_mm_pct"],
+            p["err_peak_frequency_hz_pct"],
+            p["err_friction_energy_mj_pct"],
+            p["time_s"],
+            pick["reason"],
+        )
     else:
         log.warning("tolerance %g %%: %s", tol, pick["reason"])
 
@@ -350,21 +435,44 @@ def _log_pick(pick: dict[str, Any], tol: float) -> None:
 # ---- outputs ------------------------------------------------------------------------------
 
 
-def write_fidelity_outputs(spec: StudySpec, out: Path, settings: list[Setting],
-                           ladders: dict[str, list[Setting]], ref: Setting, front: list[Setting],
-                           summary: dict[str, Any], conditions: list[tuple[float, float]],
-                           wall_s: float = 0.0) -> None:
+def write_fidelity_outputs(
+    spec: StudySpec,
+    out: Path,
+    settings: list[Setting],
+    ladders: dict[str, list[Setting]],
+    ref: Setting,
+    front: list[Setting],
+    summary: dict[str, Any],
+    conditions: list[tuple[float, float]],
+    wall_s: float = 0.0,
+) -> None:
     """Tables (CSV, JSON), charts, manifest.json and report.html."""
     from ..render.fidelity_report import fidelity_outputs
 
-    head, timings, sections = fidelity_outputs(out, settings, ladders, ref, front, summary,
-                                               conditions, spec.tolerance, wall_s)
+    head, timings, sections = fidelity_outputs(
+        out, settings, ladders, ref, front, summary, conditions, spec.tolerance, wall_s
+    )
     write_manifest_and_report(out, spec, "fidelity study,", head, timings, sections)
 
 
-__all__ = ["run_fidelity", "pareto_front", "pick_cheapest", "parse_harmonics",
-           "propose_combination", "relative_errors"]
+__all__ = [
+    "run_fidelity",
+    "pareto_front",
+    "pick_cheapest",
+    "parse_harmonics",
+    "propose_combination",
+    "relative_errors",
+]
 
 # the names below moved to post/ and studies/fidelity_plan.py; kept importable from here
-__all__ += ["KNOBS", "QUANTITIES", "STAGES", "Setting", "condition_name", "ladder_self_errors",
-            "level_label", "setting_row", "worst"]
+__all__ += [
+    "KNOBS",
+    "QUANTITIES",
+    "STAGES",
+    "Setting",
+    "condition_name",
+    "ladder_self_errors",
+    "level_label",
+    "setting_row",
+    "worst",
+]

@@ -39,9 +39,14 @@ def base_values(spec: StudySpec, damper: str) -> dict[str, Any]:
     from ..geometry import load_geometry_params
     from ..hbm.fourier import default_nt
 
-    v = {"mesh-size": spec.mesh_size, "modes": int(spec.modes),
-         "harmonics": sorted(int(h) for h in spec.harmonics), "nt": spec.nt,
-         "points-per-line": spec.points_per_line, "rigid-damper": bool(spec.rigid_damper)}
+    v = {
+        "mesh-size": spec.mesh_size,
+        "modes": int(spec.modes),
+        "harmonics": sorted(int(h) for h in spec.harmonics),
+        "nt": spec.nt,
+        "points-per-line": spec.points_per_line,
+        "rigid-damper": bool(spec.rigid_damper),
+    }
     if v["mesh-size"] is None or v["points-per-line"] is None:
         gp = load_geometry_params(damper, spec.geometry)
         if v["mesh-size"] is None:
@@ -67,12 +72,16 @@ def knob_levels(spec: StudySpec) -> dict[str, list[Any]]:
     for knob in spec.knobs:
         levels = raw[knob]
         if not levels:
-            raise InputError(f"levels-{knob}", levels, f"at least one level (or drop {knob} "
-                             "from knobs)")
+            raise InputError(
+                f"levels-{knob}", levels, f"at least one level (or drop {knob} from knobs)"
+            )
         keys = [json.dumps(x) for x in levels]
         if len(set(keys)) != len(keys):
-            raise InputError(f"levels-{knob}", getattr(spec, f"levels_{knob}".replace("-", "_")),
-                             "distinct levels")
+            raise InputError(
+                f"levels-{knob}",
+                getattr(spec, f"levels_{knob}".replace("-", "_")),
+                "distinct levels",
+            )
         out[knob] = sorted(levels, key=lambda x, k=knob: fineness(k, x))
     return out
 
@@ -120,13 +129,20 @@ def plan_settings(spec: StudySpec, damper: str) -> tuple[list[Setting], dict[str
 
 def _check_sampling(v: dict[str, Any]) -> None:
     if v["nt"] <= 2 * max(v["harmonics"]):
-        raise InputError("levels-nt", v["nt"], f"nt > 2 * max(harmonics) = "
-                         f"{2 * max(v['harmonics'])} for every setting (sampling theorem)")
+        raise InputError(
+            "levels-nt",
+            v["nt"],
+            f"nt > 2 * max(harmonics) = "
+            f"{2 * max(v['harmonics'])} for every setting (sampling theorem)",
+        )
 
 
-def propose_combination(ladders: dict[str, list[Setting]], tolerance_pct: float,
-                        shift: int = 0, errors: dict[str, list[float | None]] | None = None,
-                        ) -> tuple[dict[str, Any], dict[str, str]] | None:
+def propose_combination(
+    ladders: dict[str, list[Setting]],
+    tolerance_pct: float,
+    shift: int = 0,
+    errors: dict[str, list[float | None]] | None = None,
+) -> tuple[dict[str, Any], dict[str, str]] | None:
     """Per knob, the coarsest level whose error meets the tolerance (``shift`` levels finer).
 
     ``errors``: knob -> the error of each level (percent, coarsest first);
@@ -144,6 +160,9 @@ def propose_combination(ladders: dict[str, list[Setting]], tolerance_pct: float,
         i = min(idx[0] + shift, len(ladder) - 1)
         values[knob] = ladder[i].values[knob]
         e = errs[i]
-        why[knob] = (f"{level_label(knob, values[knob])} ({e:.3g} %)" if e is not None
-                     else level_label(knob, values[knob]))
+        why[knob] = (
+            f"{level_label(knob, values[knob])} ({e:.3g} %)"
+            if e is not None
+            else level_label(knob, values[knob])
+        )
     return values, why

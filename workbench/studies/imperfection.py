@@ -77,8 +77,14 @@ def seated_preloads(kn: np.ndarray, gap: np.ndarray, total: float) -> np.ndarray
     return kn * np.maximum(0.0, d - g)
 
 
-def tilted_preloads(points: np.ndarray, side: np.ndarray, kn: np.ndarray, n0: np.ndarray,
-                    tilt_deg: float, tilted_side: int = 0) -> np.ndarray:
+def tilted_preloads(
+    points: np.ndarray,
+    side: np.ndarray,
+    kn: np.ndarray,
+    n0: np.ndarray,
+    tilt_deg: float,
+    tilted_side: int = 0,
+) -> np.ndarray:
     """The uniform preloads ``n0`` (N) redistributed on ``tilted_side`` by a seat tilt (deg)."""
     out = np.array(n0, dtype=float, copy=True)
     if tilt_deg == 0.0:

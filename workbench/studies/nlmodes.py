@@ -39,26 +39,40 @@ log = logging.getLogger(__name__)
 SUB = "nlmodes"
 
 
-def backbone_key(case: Case, relative_range: tuple[float, float], n_steps: int,
-                 forces=None) -> str:
+def backbone_key(case: Case, relative_range: tuple[float, float], n_steps: int, forces=None) -> str:
     """Cache key of one backbone: the model, the family, the balance settings, the code."""
     from ..io import code_version
 
     root = Path(__file__).resolve().parents[1]
     s = case.settings
-    return digest({"model": case.model_digest, "phase": float(case.phase_deg),
-                   "harmonics": list(s["harmonics"]), "nt": s["nt"],
-                   "blade": s["response-blade"], "band": [s["band-in-phase"],
-                                                          s["band-out-of-phase"],
-                                                          s["band-margin"]],
-                   "range": list(relative_range), "steps": int(n_steps),
-                   "top_force": max(forces) if forces else None,
-                   "code": [code_version(root / "hbm"), code_version(root / "contact"),
-                            code_version(root / "assembly")]}, 16)
+    return digest(
+        {
+            "model": case.model_digest,
+            "phase": float(case.phase_deg),
+            "harmonics": list(s["harmonics"]),
+            "nt": s["nt"],
+            "blade": s["response-blade"],
+            "band": [s["band-in-phase"], s["band-out-of-phase"], s["band-margin"]],
+            "range": list(relative_range),
+            "steps": int(n_steps),
+            "top_force": max(forces) if forces else None,
+            "code": [
+                code_version(root / "hbm"),
+                code_version(root / "contact"),
+                code_version(root / "assembly"),
+            ],
+        },
+        16,
+    )
 
 
-def family_backbone(prep, case: Case, relative_range: tuple[float, float] = (0.05, 300.0),
-                    n_steps: int = 40, forces=None):
+def family_backbone(
+    prep,
+    case: Case,
+    relative_range: tuple[float, float] = (0.05, 300.0),
+    n_steps: int = 40,
+    forces=None,
+):
     """The backbone of ``case``'s family on a prepared model, with its excitation and band."""
     from ..hbm.nlmodes import nonlinear_mode, pick_mode
     from .runner import band_for
@@ -70,17 +84,33 @@ def family_backbone(prep, case: Case, relative_range: tuple[float, float] = (0.0
     mode = pick_mode(prep.system, f1, band)
     blade = s["response-blade"]
     nm = nonlinear_mode(
-        prep.system, mode=mode, relative_range=relative_range,
-        harmonics=tuple(s["harmonics"]), nt=s["nt"],
-        outputs=model.response_dofs[blade - 1: blade], output_names=(f"blade{blade}_x",),
-        n_steps=n_steps, f1=f1, levels=forces, max_fold_points=20,  # beyond a fold the
-        label=f"{case.damper} {case.phase_deg:g} deg")  # synthesis is flagged anyway
+        prep.system,
+        mode=mode,
+        relative_range=relative_range,
+        harmonics=tuple(s["harmonics"]),
+        nt=s["nt"],
+        outputs=model.response_dofs[blade - 1 : blade],
+        output_names=(f"blade{blade}_x",),
+        n_steps=n_steps,
+        f1=f1,
+        levels=forces,
+        max_fold_points=20,  # beyond a fold the
+        label=f"{case.damper} {case.phase_deg:g} deg",
+    )  # synthesis is flagged anyway
     return nm, f1, band
 
 
-def study_backbones(spec: StudySpec, out: str | Path, *, prepared: dict | None = None,
-                    cases: list[Case] | None = None, relative_range=(0.05, 300.0),
-                    n_steps: int = 40, force: bool = False, comm=None) -> dict[str, Any]:
+def study_backbones(
+    spec: StudySpec,
+    out: str | Path,
+    *,
+    prepared: dict | None = None,
+    cases: list[Case] | None = None,
+    relative_range=(0.05, 300.0),
+    n_steps: int = 40,
+    force: bool = False,
+    comm=None,
+) -> dict[str, Any]:
     """Backbones of every model and family of ``spec``, syntheses at its forces, HBM checks.
 
     Returns ``{"rows": [...], "backbones": [...], "timings": {...}}``: one
@@ -113,7 +143,8 @@ def study_backbones(spec: StudySpec, out: str | Path, *, prepared: dict | None =
         key = backbone_key(c0, relative_range, n_steps, [c.force_n for c in cs])
         h5, npz = ndir / f"{key}.h5", ndir / f"{key}.npz"
         label = f"{c0.damper}, {family_name(c0.phase_deg)}" + (
-            f" [{c0.variant}]" if c0.variant else "")
+            f" [{c0.variant}]" if c0.variant else ""
+        )
         if h5.is_file() and npz.is_file() and not force:
             nm = NlModeBranch.load(h5)
             with np.load(npz) as z:
@@ -122,37 +153,59 @@ def study_backbones(spec: StudySpec, out: str | Path, *, prepared: dict | None =
             t0 = time.perf_counter()
             if md not in prepared:
                 prepared[md] = prepare_model(c0, out)
-            nm, f1, band = family_backbone(prepared[md], c0, relative_range, n_steps,
-                                           forces=[c.force_n for c in cs])
+            nm, f1, band = family_backbone(
+                prepared[md], c0, relative_range, n_steps, forces=[c.force_n for c in cs]
+            )
             nm.timings["wall"] = time.perf_counter() - t0
             nm.save(h5)
             from ..io import atomic_path
 
             with atomic_path(npz) as tmp, open(tmp, "wb") as fh:
                 np.savez(fh, f1=f1, band=np.asarray(band, float))
-            log.info("backbone %s: %d points, %.1f s (%s)", label, nm.n_points,
-                     nm.timings["total"], nm.message)
+            log.info(
+                "backbone %s: %d points, %.1f s (%s)",
+                label,
+                nm.n_points,
+                nm.timings["total"],
+                nm.message,
+            )
         t_nm = float(nm.timings.get("total", 0.0))
         timings[label] = t_nm
-        backbones.append({"label": label, "damper": c0.damper, "variant": c0.variant,
-                          "phase_deg": c0.phase_deg, "family": family_name(c0.phase_deg),
-                          "file": str(h5.relative_to(out)), "seconds": t_nm,
-                          "band_hz": list(band), **nm.summary()})
+        backbones.append(
+            {
+                "label": label,
+                "damper": c0.damper,
+                "variant": c0.variant,
+                "phase_deg": c0.phase_deg,
+                "family": family_name(c0.phase_deg),
+                "file": str(h5.relative_to(out)),
+                "seconds": t_nm,
+                "band_hz": list(band),
+                **nm.summary(),
+            }
+        )
         for c in cs:
             t0 = time.perf_counter()
             syn = synthesize(nm, f1, c.force_n, 0, band) if nm.n_points >= 2 else None
             t_syn = time.perf_counter() - t0
             row: dict[str, Any] = {
-                "label": label, "damper": c.damper, "variant": c.variant,
-                "family": family_name(c.phase_deg), "phase_deg": c.phase_deg,
-                "force_n": c.force_n, "case_digest": c.digest,
+                "label": label,
+                "damper": c.damper,
+                "variant": c.variant,
+                "family": family_name(c.phase_deg),
+                "phase_deg": c.phase_deg,
+                "force_n": c.force_n,
+                "case_digest": c.digest,
                 "syn_peak_frequency_hz": syn.peak_freq_hz if syn else None,
                 "syn_peak_amplitude_mm": syn.peak_amplitude * 1e3 if syn else None,
                 "valid": bool(syn.valid) if syn else False,
                 "reasons": "; ".join(syn.reasons) if syn else "no backbone",
                 "syn_seconds": t_syn,
-                "hbm_peak_frequency_hz": None, "hbm_peak_amplitude_mm": None,
-                "hbm_seconds": None, "error_pct": None, "freq_error_pct": None,
+                "hbm_peak_frequency_hz": None,
+                "hbm_peak_amplitude_mm": None,
+                "hbm_seconds": None,
+                "error_pct": None,
+                "freq_error_pct": None,
             }
             cfile = out / "cache" / "cases" / f"{c.digest}.h5"
             if cfile.is_file():
@@ -161,13 +214,16 @@ def study_backbones(spec: StudySpec, out: str | Path, *, prepared: dict | None =
                 if i >= 0:
                     row["hbm_peak_frequency_hz"] = float(cr.freq_hz[i])
                     row["hbm_peak_amplitude_mm"] = float(cr.amp_mm[i])
-                    row["hbm_seconds"] = float(cr.timings.get(
-                        "hbm", cr.branch.timings.get("total", 0.0)))
+                    row["hbm_seconds"] = float(
+                        cr.timings.get("hbm", cr.branch.timings.get("total", 0.0))
+                    )
                     if syn:
-                        row["error_pct"] = 100 * (syn.peak_amplitude * 1e3 / row[
-                            "hbm_peak_amplitude_mm"] - 1)
-                        row["freq_error_pct"] = 100 * (syn.peak_freq_hz / row[
-                            "hbm_peak_frequency_hz"] - 1)
+                        row["error_pct"] = 100 * (
+                            syn.peak_amplitude * 1e3 / row["hbm_peak_amplitude_mm"] - 1
+                        )
+                        row["freq_error_pct"] = 100 * (
+                            syn.peak_freq_hz / row["hbm_peak_frequency_hz"] - 1
+                        )
             rows.append(row)
     return {"rows": rows, "backbones": backbones, "timings": timings}
 
@@ -182,16 +238,23 @@ def cost_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
         t_n = bb["seconds"] + sum(r["syn_seconds"] for r in rs)
         ev = [abs(r["error_pct"]) for r in done if r["valid"] and r["error_pct"] is not None]
         ea = [abs(r["error_pct"]) for r in done if r["error_pct"] is not None]
-        out.append({
-            "label": bb["label"], "n_forces": len(rs), "n_hbm": len(done),
-            "n_valid": sum(1 for r in rs if r["valid"]),
-            "backbone_s": round(t_n, 3), "hbm_s": round(t_h, 3),
-            "time_ratio": round(t_n / t_h, 4) if t_h > 0 else None,
-            "max_error_valid_pct": round(max(ev), 3) if ev else None,
-            "max_error_all_pct": round(max(ea), 3) if ea else None,
-            "damping_max": bb.get("damping_max"), "f_stuck_hz": bb.get("f_stuck_hz"),
-            "freq_last_hz": bb.get("freq_last_hz"), "message": bb.get("message", ""),
-        })
+        out.append(
+            {
+                "label": bb["label"],
+                "n_forces": len(rs),
+                "n_hbm": len(done),
+                "n_valid": sum(1 for r in rs if r["valid"]),
+                "backbone_s": round(t_n, 3),
+                "hbm_s": round(t_h, 3),
+                "time_ratio": round(t_n / t_h, 4) if t_h > 0 else None,
+                "max_error_valid_pct": round(max(ev), 3) if ev else None,
+                "max_error_all_pct": round(max(ea), 3) if ea else None,
+                "damping_max": bb.get("damping_max"),
+                "f_stuck_hz": bb.get("f_stuck_hz"),
+                "freq_last_hz": bb.get("freq_last_hz"),
+                "message": bb.get("message", ""),
+            }
+        )
     return out
 
 
@@ -210,7 +273,8 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
     tdir.mkdir(parents=True, exist_ok=True)
     bbs = {b["label"]: NlModeBranch.load(out / b["file"]) for b in res["backbones"]}
     sec_bb: dict[str, Any] = {
-        "id": "nlmodes", "title": "Nonlinear modes: backbones (extended periodic motion)",
+        "id": "nlmodes",
+        "title": "Nonlinear modes: backbones (extended periodic motion)",
         "text": [
             "Each damper's family mode followed in modal amplitude with a negative "
             "mass-proportional damping -xi M q' that makes its free motion periodic (Krack "
@@ -219,26 +283,60 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
             "viscous damping (D equals it while every pair sticks). Where D peaks the damper "
             "works best; where the frequency has dropped to its sliding value the damper no "
             "longer carries load. Horizontal axis: the response-blade amplitude of the mode "
-            "at that modal amplitude."],
-        "figures": [], "tables": []}
+            "at that modal amplitude."
+        ],
+        "figures": [],
+        "tables": [],
+    }
     families = list(dict.fromkeys(b["family"] for b in res["backbones"]))
     for fam in families:
-        pairs = [(b["damper"] + (f" [{b['variant']}]" if b["variant"] else ""), bbs[b["label"]])
-                 for b in res["backbones"] if b["family"] == fam]
+        pairs = [
+            (b["damper"] + (f" [{b['variant']}]" if b["variant"] else ""), bbs[b["label"]])
+            for b in res["backbones"]
+            if b["family"] == fam
+        ]
         name = f"backbone_{fam.replace(' ', '_')}"
-        plot_backbones(pairs, fdir / f"{name}.png", unit_scale=1e3, unit="mm",
-                       title=f"nonlinear modes, {fam}")
-        sec_bb["figures"].append({"path": f"figures/{SUB}/{name}.png", "caption": (
-            f"{fam}: frequency, modal damping ratio, friction energy per cycle and (first "
-            "damper) share of contact pairs in each status against the response amplitude.")})
-    bb_rows = [{k: b.get(k) for k in ("label", "f_stuck_hz", "freq_last_hz", "damping_first",
-                                      "damping_max", "freq_at_damping_max_hz", "mac_min",
-                                      "n_points", "seconds", "completed", "message")}
-               for b in res["backbones"]]
+        plot_backbones(
+            pairs, fdir / f"{name}.png", unit_scale=1e3, unit="mm", title=f"nonlinear modes, {fam}"
+        )
+        sec_bb["figures"].append(
+            {
+                "path": f"figures/{SUB}/{name}.png",
+                "caption": (
+                    f"{fam}: frequency, modal damping ratio, friction energy per cycle and (first "
+                    "damper) share of contact pairs in each status against the response amplitude."
+                ),
+            }
+        )
+    bb_rows = [
+        {
+            k: b.get(k)
+            for k in (
+                "label",
+                "f_stuck_hz",
+                "freq_last_hz",
+                "damping_first",
+                "damping_max",
+                "freq_at_damping_max_hz",
+                "mac_min",
+                "n_points",
+                "seconds",
+                "completed",
+                "message",
+            )
+        }
+        for b in res["backbones"]
+    ]
     write_rows_csv(tdir / "backbones.csv", bb_rows)
-    sec_bb["tables"].append({"path": f"tables/{SUB}/backbones.csv", "caption": (
-        "Backbones: stuck and last frequency, damping ratio at the start and its maximum "
-        "(and where), smallest MAC against the low-amplitude shape, cost")})
+    sec_bb["tables"].append(
+        {
+            "path": f"tables/{SUB}/backbones.csv",
+            "caption": (
+                "Backbones: stuck and last frequency, damping ratio at the start and its maximum "
+                "(and where), smallest MAC against the low-amplitude shape, cost"
+            ),
+        }
+    )
     sec_syn: dict[str, Any] = {
         "id": "nlmodes-synthesis",
         "title": "Forced responses from the nonlinear modes against the full HBM",
@@ -251,8 +349,11 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
             "frequency, a backbone that does not fold back in amplitude (modal interaction), "
             "the other modes adding less than 1 % to the peak (their stuck linear response), "
             "higher harmonics below 20 %, damping ratio below 0.15. Where it is flagged not "
-            "valid the full HBM is the answer."],
-        "figures": [], "tables": []}
+            "valid the full HBM is the answer."
+        ],
+        "figures": [],
+        "tables": [],
+    }
     rows = res["rows"]
     for b in res["backbones"]:
         rs = [r for r in rows if r["label"] == b["label"]]
@@ -269,28 +370,70 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
             cfile = out / "cache" / "cases" / f"{r['case_digest']}.h5"
             hbm.append(CaseResult.load(cfile).branch if cfile.is_file() else None)
         name = "synthesis_" + b["label"].replace(", ", "_").replace(" ", "_").replace(
-            "[", "").replace("]", "").replace("=", "")
-        plot_synthesis(nm, syns, fdir / f"{name}.png", hbm=hbm, unit_scale=1e3, unit="mm",
-                       band_hz=band, title=f"{b['label']}: synthesis (solid) and full HBM")
-        sec_syn["figures"].append({"path": f"figures/{SUB}/{name}.png", "caption": (
-            f"{b['label']}: forced responses from the nonlinear mode (solid; dotted where "
-            "flagged not valid), the full HBM curves (dashed) and the backbone (black).")})
+            "[", ""
+        ).replace("]", "").replace("=", "")
+        plot_synthesis(
+            nm,
+            syns,
+            fdir / f"{name}.png",
+            hbm=hbm,
+            unit_scale=1e3,
+            unit="mm",
+            band_hz=band,
+            title=f"{b['label']}: synthesis (solid) and full HBM",
+        )
+        sec_syn["figures"].append(
+            {
+                "path": f"figures/{SUB}/{name}.png",
+                "caption": (
+                    f"{b['label']}: forced responses from the nonlinear mode (solid; dotted where "
+                    "flagged not valid), the full HBM curves (dashed) and the backbone (black)."
+                ),
+            }
+        )
     if any(r["error_pct"] is not None for r in rows):
         plot_synthesis_errors(rows, fdir / "synthesis_errors.png")
-        sec_syn["figures"].append({"path": f"figures/{SUB}/synthesis_errors.png", "caption": (
-            "Peak amplitude error of the synthesis against the full HBM per force (o: valid, "
-            "x: flagged not valid); the dashed line is 2 %.")})
-    cols = ("label", "force_n", "hbm_peak_amplitude_mm", "syn_peak_amplitude_mm", "error_pct",
-            "hbm_peak_frequency_hz", "syn_peak_frequency_hz", "freq_error_pct", "valid",
-            "reasons", "hbm_seconds")
+        sec_syn["figures"].append(
+            {
+                "path": f"figures/{SUB}/synthesis_errors.png",
+                "caption": (
+                    "Peak amplitude error of the synthesis against the full HBM "
+                    "per force (o: valid, "
+                    "x: flagged not valid); the dashed line is 2 %."
+                ),
+            }
+        )
+    cols = (
+        "label",
+        "force_n",
+        "hbm_peak_amplitude_mm",
+        "syn_peak_amplitude_mm",
+        "error_pct",
+        "hbm_peak_frequency_hz",
+        "syn_peak_frequency_hz",
+        "freq_error_pct",
+        "valid",
+        "reasons",
+        "hbm_seconds",
+    )
     write_rows_csv(tdir / "synthesis.csv", [{k: r.get(k) for k in cols} for r in rows])
-    sec_syn["tables"].append({"path": f"tables/{SUB}/synthesis.csv", "caption": (
-        "Every force: HBM and synthesised peak, error, validity and why not")})
+    sec_syn["tables"].append(
+        {
+            "path": f"tables/{SUB}/synthesis.csv",
+            "caption": ("Every force: HBM and synthesised peak, error, validity and why not"),
+        }
+    )
     cost = cost_rows(res)
     write_rows_csv(tdir / "cost.csv", cost)
-    sec_syn["tables"].append({"path": f"tables/{SUB}/cost.csv", "caption": (
-        "Per damper and family: time of the backbone and its syntheses against the full HBM "
-        "curves it replaces, worst peak error where valid and overall")})
+    sec_syn["tables"].append(
+        {
+            "path": f"tables/{SUB}/cost.csv",
+            "caption": (
+                "Per damper and family: time of the backbone and its syntheses against "
+                "the full HBM curves it replaces, worst peak error where valid and overall"
+            ),
+        }
+    )
     tot_n = sum(c["backbone_s"] for c in cost)
     tot_h = sum(c["hbm_s"] for c in cost)
     if tot_h > 0:
@@ -298,8 +441,12 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
         sec_syn["text"].append(
             f"{len(cost)} backbones took {tot_n:.1f} s against {tot_h:.1f} s for the "
             f"{sum(c['n_hbm'] for c in cost)} full HBM curves (ratio {tot_n / tot_h:.3f}); "
-            + (f"worst peak error where valid {max(ev):.2f} %." if ev else
-               "no synthesis is flagged valid."))
+            + (
+                f"worst peak error where valid {max(ev):.2f} %."
+                if ev
+                else "no synthesis is flagged valid."
+            )
+        )
     return [sec_bb, sec_syn]
 
 
@@ -362,15 +509,26 @@ def fidelity_entry(comp, base, ref, out: str | Path):
             continue
         if not s.valid:
             invalid.append(f"{cond}: {'; '.join(s.reasons)}")
-        k = int(np.clip(np.searchsorted(nm.amplitude, s.peak_modal_amplitude), 1,
-                        nm.n_points - 1))
-        e_pk = float(np.interp(s.peak_modal_amplitude, nm.amplitude[k - 1:k + 1],
-                               nm.friction_energy[k - 1:k + 1].sum(axis=1))) * 1e3
-        mine = {"peak_amplitude_mm": s.peak_amplitude * 1e3,
-                "peak_frequency_hz": s.peak_freq_hz, "friction_energy_mj": e_pk}
-        st.errors[cond] = {q: (abs(mine[q] - sr[q]) / abs(sr[q]) * 100.0
-                               if sr.get(q) not in (None, 0) else None)
-                           for q, _, _ in QUANTITIES}
+        k = int(np.clip(np.searchsorted(nm.amplitude, s.peak_modal_amplitude), 1, nm.n_points - 1))
+        e_pk = (
+            float(
+                np.interp(
+                    s.peak_modal_amplitude,
+                    nm.amplitude[k - 1 : k + 1],
+                    nm.friction_energy[k - 1 : k + 1].sum(axis=1),
+                )
+            )
+            * 1e3
+        )
+        mine = {
+            "peak_amplitude_mm": s.peak_amplitude * 1e3,
+            "peak_frequency_hz": s.peak_freq_hz,
+            "friction_energy_mj": e_pk,
+        }
+        st.errors[cond] = {
+            q: (abs(mine[q] - sr[q]) / abs(sr[q]) * 100.0 if sr.get(q) not in (None, 0) else None)
+            for q, _, _ in QUANTITIES
+        }
     if invalid:
         st.members.append(("not valid", "; ".join(invalid)))
     return st

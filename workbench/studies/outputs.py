@@ -24,8 +24,9 @@ if TYPE_CHECKING:
     from .runner import PreparedModel
 
 
-def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
-                  prepared: dict[str, PreparedModel]) -> None:
+def write_outputs(
+    results: StudyResults, spec: StudySpec, out: Path, prepared: dict[str, PreparedModel]
+) -> None:
     """results.h5, CSV files, summary, figures, tables, manifest and report."""
     from ..post.tables import write_rows_csv
 
@@ -49,24 +50,34 @@ def write_outputs(results: StudyResults, spec: StudySpec, out: Path,
         from .nlmodes import nlmode_sections
 
         sections += nlmode_sections(results.extras["nlmodes"], out)
-    write_manifest_and_report(out, spec, f"{spec.kind} study,", headline(results),
-                              timings, sections)
+    write_manifest_and_report(
+        out, spec, f"{spec.kind} study,", headline(results), timings, sections
+    )
 
 
-def write_manifest_and_report(out: Path, spec: StudySpec, subtitle: str, summary: list[str],
-                              timings: dict[str, float], sections: list[dict]) -> None:
+def write_manifest_and_report(
+    out: Path,
+    spec: StudySpec,
+    subtitle: str,
+    summary: list[str],
+    timings: dict[str, float],
+    sections: list[dict],
+) -> None:
     """``manifest.json`` (see render/report.py for its layout) and ``report.html``."""
     from ..post.inputs import used_inputs
     from ..render.report import write_report
     from ..versions import software_versions
 
     manifest = {
-        "title": f"Study '{spec.name}'", "subtitle": subtitle,
+        "title": f"Study '{spec.name}'",
+        "subtitle": subtitle,
         "created": time.strftime("%Y-%m-%d %H:%M:%S"),
         "summary": summary,
-        "inputs": spec.as_dict(), "sources": spec.source,
+        "inputs": spec.as_dict(),
+        "sources": spec.source,
         "inputs_used": used_inputs(spec.as_dict(), spec.source),
-        "versions": software_versions(), "timings": timings,
+        "versions": software_versions(),
+        "timings": timings,
         "sections": sections,
     }
     write_json(out / "manifest.json", manifest)
@@ -110,17 +121,20 @@ def headline(results: StudyResults) -> list[str]:
                     f"{d}, {top.family}{which}: at {top.force_n:g} N the resonance was NOT "
                     "reached; "
                     f"the peak is at least {s['peak_lower_bound_mm']:.4g} mm (lower bound: "
-                    f"{top.peak_note()})")
+                    f"{top.peak_note()})"
+                )
                 continue
             lines.append(
                 f"{d}, {top.family}{which}: at {top.force_n:g} N the peak is "
                 f"{s['peak_amplitude_mm']:.4g} mm at {s['peak_frequency_hz']:.2f} Hz, "
-                f"friction energy {s['friction_energy_mj']:.3g} mJ per cycle")
+                f"friction energy {s['friction_energy_mj']:.3g} mJ per cycle"
+            )
     short = results.uncovered()
     if short:
-        lines.append(f"{len(short)} of {len(results.cases)} case(s) did not cover their "
-                     "resonance (peak only a lower bound): "
-                     + ", ".join(c.case_id for c in short))
+        lines.append(
+            f"{len(short)} of {len(results.cases)} case(s) did not cover their "
+            "resonance (peak only a lower bound): " + ", ".join(c.case_id for c in short)
+        )
     return lines
 
 
@@ -138,13 +152,22 @@ def check_failures(results: StudyResults, summary: dict | None = None) -> None:
         return
     parts = []
     if failed:
-        parts.append(f"{len(failed)} case(s) failed: " + "; ".join(
-            f"{c.case_id} ({c.branch.message})" for c in failed[:3])
-            + ("; ..." if len(failed) > 3 else ""))
+        parts.append(
+            f"{len(failed)} case(s) failed: "
+            + "; ".join(f"{c.case_id} ({c.branch.message})" for c in failed[:3])
+            + ("; ..." if len(failed) > 3 else "")
+        )
     if short:
-        parts.append(f"{len(short)} case(s) did not reach their resonance peak, which is only a "
-                     "lower bound: " + "; ".join(
-                         f"{c.case_id} ({c.branch.message or 'peak at the band edge'})"
-                         for c in short[:3]) + ("; ..." if len(short) > 3 else ""))
-    raise SolveError(" and ".join(parts) + " (all computed points are kept in the results "
-                     "and the report)", partial=results, summary=summary)
+        parts.append(
+            f"{len(short)} case(s) did not reach their resonance peak, which is only a "
+            "lower bound: "
+            + "; ".join(
+                f"{c.case_id} ({c.branch.message or 'peak at the band edge'})" for c in short[:3]
+            )
+            + ("; ..." if len(short) > 3 else "")
+        )
+    raise SolveError(
+        " and ".join(parts) + " (all computed points are kept in the results and the report)",
+        partial=results,
+        summary=summary,
+    )

@@ -19,11 +19,30 @@ from ..io import digest
 from .spec import StudySpec
 
 MODEL_KEYS = (
-    "mu", "cf", "kt-line", "kn-line", "kt-face", "kn-face", "damping", "mesh-size", "modes",
-    "rigid-damper", "points-per-line", "geometry", "cone-angle",
+    "mu",
+    "cf",
+    "kt-line",
+    "kn-line",
+    "kt-face",
+    "kn-face",
+    "damping",
+    "mesh-size",
+    "modes",
+    "rigid-damper",
+    "points-per-line",
+    "geometry",
+    "cone-angle",
 )
-SOLVE_KEYS = ("harmonics", "nt", "max-points", "stability", "response-blade", "band-margin",
-              "band-in-phase", "band-out-of-phase")
+SOLVE_KEYS = (
+    "harmonics",
+    "nt",
+    "max-points",
+    "stability",
+    "response-blade",
+    "band-margin",
+    "band-in-phase",
+    "band-out-of-phase",
+)
 
 
 @dataclass(frozen=True)
@@ -47,16 +66,21 @@ class Case:
         """The model part of the key: the options and the contents of the files they name
         (a study file's geometry file and the default geometry/contact files), so editing a
         file recomputes what depends on it."""
-        return {"damper": self.damper, **{k: self.settings[k] for k in MODEL_KEYS},
-                "files": input_files_digest(self.damper, self.settings.get("geometry"))}
+        return {
+            "damper": self.damper,
+            **{k: self.settings[k] for k in MODEL_KEYS},
+            "files": input_files_digest(self.damper, self.settings.get("geometry")),
+        }
 
     def solve_params(self) -> dict[str, Any]:
-        return {"phase_deg": self.phase_deg, "force_n": self.force_n,
-                **{k: self.settings[k] for k in SOLVE_KEYS}}
+        return {
+            "phase_deg": self.phase_deg,
+            "force_n": self.force_n,
+            **{k: self.settings[k] for k in SOLVE_KEYS},
+        }
 
 
-NLMODE_SOURCES = ("nlmodes.py", "epmc.py", "epmc_condensed.py", "nlmode_branch.py",
-                  "synthesis.py")
+NLMODE_SOURCES = ("nlmodes.py", "epmc.py", "epmc_condensed.py", "nlmode_branch.py", "synthesis.py")
 
 
 def solver_code_version() -> str:
@@ -71,8 +95,7 @@ def solver_code_version() -> str:
     root = Path(__file__).resolve().parents[1]
     parts = [code_version(root / pkg) for pkg in ("contact", "assembly")]
     # the nonlinear modes (NLMODE_SOURCES) do not shape a forced response
-    hbm = tuple(p.name for p in sorted((root / "hbm").glob("*.py"))
-                if p.name not in NLMODE_SOURCES)
+    hbm = tuple(p.name for p in sorted((root / "hbm").glob("*.py")) if p.name not in NLMODE_SOURCES)
     parts.insert(1, code_version(root / "hbm", hbm))
     parts.append(code_version(root / "studies", ("plan.py", "runner.py")))
     return digest(parts, 12)
@@ -102,12 +125,16 @@ def _files_digest(paths: tuple[str, ...]) -> str:
     return digest(parts, 16)
 
 
-def make_case(damper: str, phase: float, force: float, settings: dict[str, Any],
-              variant: str = "") -> Case:
+def make_case(
+    damper: str, phase: float, force: float, settings: dict[str, Any], variant: str = ""
+) -> Case:
     c = Case(damper, float(phase), float(force), dict(settings), variant)
     md = digest(c.model_params())
-    return dataclasses.replace(c, model_digest=md, digest=digest(
-        {"model": md, "solve": c.solve_params(), "code": _SOLVER_CODE()}))
+    return dataclasses.replace(
+        c,
+        model_digest=md,
+        digest=digest({"model": md, "solve": c.solve_params(), "code": _SOLVER_CODE()}),
+    )
 
 
 @functools.lru_cache(maxsize=1)
@@ -121,7 +148,8 @@ def plan(spec: StudySpec) -> list[Case]:
     cases: list[Case] = []
     if spec.kind == "sweep" and spec.sweep is not None:
         for value, damper, phase, force in itertools.product(
-                spec.sweep_values, spec.dampers, spec.phases, spec.forces):
+            spec.sweep_values, spec.dampers, spec.phases, spec.forces
+        ):
             s = dict(base)
             s[spec.sweep] = value
             cases.append(make_case(damper, phase, force, s, f"{spec.sweep}={value:g}"))

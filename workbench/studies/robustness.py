@@ -77,8 +77,14 @@ log = logging.getLogger(__name__)
 # ---- the map of cells (one cell is solved and judged in robustness_cells.py) ----------------
 
 
-def method_map(problems: list[Problem], methods: list[str], cache_dir: Path | None = None,
-               *, force: bool = False, tol_pct: float = 1.0) -> list[dict[str, Any]]:
+def method_map(
+    problems: list[Problem],
+    methods: list[str],
+    cache_dir: Path | None = None,
+    *,
+    force: bool = False,
+    tol_pct: float = 1.0,
+) -> list[dict[str, Any]]:
     """Every (method, problem) cell, cached in ``cache_dir`` when given, classified.
 
     The first method is the reference. Returns one record per cell, problems
@@ -115,9 +121,14 @@ def method_map(problems: list[Problem], methods: list[str], cache_dir: Path | No
                     if path is not None:
                         write_json(path, rec)
                     if not bars_enabled():
-                        log.info("%s / %s: %s (%d points, %.1f s)", p.name, m,
-                                 "failed" if rec["failed"] else "done", rec["n_points"],
-                                 rec["wall_s"])
+                        log.info(
+                            "%s / %s: %s (%d points, %.1f s)",
+                            p.name,
+                            m,
+                            "failed" if rec["failed"] else "done",
+                            rec["n_points"],
+                            rec["wall_s"],
+                        )
                 rec.update({k: v for k, v in p.info.items() if k not in rec})
                 cells.append(rec)
                 bar.update(1)
@@ -127,6 +138,7 @@ def method_map(problems: list[Problem], methods: list[str], cache_dir: Path | No
 
 
 # ---- the hard cases of the rig --------------------------------------------------------------
+
 
 def case_problems(spec: StudySpec, out: Path, force: bool = False) -> list[Problem]:
     """The study's hard cases as problems on the assembled rig + damper models."""
@@ -147,26 +159,58 @@ def case_problems(spec: StudySpec, out: Path, force: bool = False) -> list[Probl
                 prepared[case.model_digest] = prepare_model(case, out, force=force)
             prep = prepared[case.model_digest]
             blade = case.settings["response-blade"]
-            return (prep.system, prep.assembled.excitation(case.phase_deg), band_for(prep, case),
-                    prep.assembled.response_dofs[blade - 1: blade], (f"blade{blade}_x",))
+            return (
+                prep.system,
+                prep.assembled.excitation(case.phase_deg),
+                band_for(prep, case),
+                prep.assembled.response_dofs[blade - 1 : blade],
+                (f"blade{blade}_x",),
+            )
 
         s = case.settings
-        problems.append(Problem(
-            name=name, key=case.digest, level=hc.force_n, harmonics=tuple(s["harmonics"]),
-            nt=s["nt"], build=build,
-            base_options={"stability": s["stability"], "max_points": s["max-points"]},
-            info={"damper": hc.damper, "phase_deg": hc.phase_deg, "force_n": hc.force_n,
-                  "changes": ", ".join(f"{k} = {v:g}" for k, v in hc.settings.items())
-                  or "none"}))
+        problems.append(
+            Problem(
+                name=name,
+                key=case.digest,
+                level=hc.force_n,
+                harmonics=tuple(s["harmonics"]),
+                nt=s["nt"],
+                build=build,
+                base_options={"stability": s["stability"], "max_points": s["max-points"]},
+                info={
+                    "damper": hc.damper,
+                    "phase_deg": hc.phase_deg,
+                    "force_n": hc.force_n,
+                    "changes": ", ".join(f"{k} = {v:g}" for k, v in hc.settings.items()) or "none",
+                },
+            )
+        )
     return problems
 
 
 # ---- the study ------------------------------------------------------------------------------
 
-_CELL_COLS = ("case", "method", "status", "succeeded", "n_points", "newton_its", "wall_s",
-              "peak_amplitude", "peak_frequency_hz", "amp_dev_pct", "freq_dev_pct",
-              "freq_reached_hz", "band_fraction", "n_turning_points", "n_unstable",
-              "max_status", "n_unknowns", "energy_residual_max", "message")
+_CELL_COLS = (
+    "case",
+    "method",
+    "status",
+    "succeeded",
+    "n_points",
+    "newton_its",
+    "wall_s",
+    "peak_amplitude",
+    "peak_frequency_hz",
+    "amp_dev_pct",
+    "freq_dev_pct",
+    "freq_reached_hz",
+    "band_fraction",
+    "n_turning_points",
+    "n_unstable",
+    "max_status",
+    "n_unknowns",
+    "energy_residual_max",
+    "message",
+)
 
 
 def _write_csv(path: Path, rows: list[dict[str, Any]], cols: tuple[str, ...]) -> Path:
@@ -183,8 +227,11 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     from ..log import mpi_size
 
     if mpi_size() > 1:
-        raise InputError("kind", "robustness", "a robustness study on one process (no mpirun): "
-                         "its timings compare methods")
+        raise InputError(
+            "kind",
+            "robustness",
+            "a robustness study on one process (no mpirun): its timings compare methods",
+        )
     out = Path(out)
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
@@ -192,8 +239,9 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     cache.mkdir(parents=True, exist_ok=True)
     problems = case_problems(spec, out, force=force)
     t0 = time.perf_counter()
-    cells = method_map(problems, list(spec.methods), cache, force=force,
-                       tol_pct=spec.peak_tolerance)
+    cells = method_map(
+        problems, list(spec.methods), cache, force=force, tol_pct=spec.peak_tolerance
+    )
     timings["cells (wall)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     checks = time_checks(cache, force=force) if spec.time_check else []
@@ -202,37 +250,88 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     # tables
     tables = out / "tables"
     _write_csv(out / "cells.csv", cells, _CELL_COLS)
-    write_json(out / "cells.json", [{k: v for k, v in c.items()
-                                     if k not in ("freq_hz", "amp", "stable")} for c in cells])
+    write_json(
+        out / "cells.json",
+        [{k: v for k, v in c.items() if k not in ("freq_hz", "amp", "stable")} for c in cells],
+    )
     map_rows = [{**c, "wall_s": round(c["wall_s"], 2)} for c in cells]
-    _write_csv(tables / "robustness_cells.csv", map_rows,
-               ("case", "method", "status", "n_points", "newton_its", "wall_s", "amp_dev_pct",
-                "freq_dev_pct", "freq_reached_hz", "n_turning_points", "n_unstable"))
+    _write_csv(
+        tables / "robustness_cells.csv",
+        map_rows,
+        (
+            "case",
+            "method",
+            "status",
+            "n_points",
+            "newton_its",
+            "wall_s",
+            "amp_dev_pct",
+            "freq_dev_pct",
+            "freq_reached_hz",
+            "n_turning_points",
+            "n_unstable",
+        ),
+    )
     fails = [c for c in cells if c["status"] != "ok"]
-    _write_csv(tables / "robustness_failures.csv", fails,
-               ("case", "method", "status", "n_points", "freq_reached_hz", "band_fraction",
-                "last_freq_hz", "amp_dev_pct", "freq_dev_pct", "message"))
+    _write_csv(
+        tables / "robustness_failures.csv",
+        fails,
+        (
+            "case",
+            "method",
+            "status",
+            "n_points",
+            "freq_reached_hz",
+            "band_fraction",
+            "last_freq_hz",
+            "amp_dev_pct",
+            "freq_dev_pct",
+            "message",
+        ),
+    )
     ref = spec.methods[0]
     case_rows = []
     for p in problems:
         r = next(c for c in cells if c["case"] == p.name and c["method"] == ref)
-        case_rows.append({"case": p.name, "damper": p.info["damper"],
-                          "phase_deg": p.info["phase_deg"], "force_n": p.info["force_n"],
-                          "changes": p.info["changes"],
-                          "band_hz": f"{r['band_hz'][0]:.1f}-{r['band_hz'][1]:.1f}",
-                          "n_unknowns": r.get("n_unknowns"),
-                          "turning_points": r["n_turning_points"],
-                          "turning_points_hz": " ".join(f"{x:.2f}" for x in
-                                                        r["turning_points_hz"]),
-                          "separated_share": r.get("separated_share"),
-                          "n_unstable": r["n_unstable"], "why": CASES[p.name].why})
+        case_rows.append(
+            {
+                "case": p.name,
+                "damper": p.info["damper"],
+                "phase_deg": p.info["phase_deg"],
+                "force_n": p.info["force_n"],
+                "changes": p.info["changes"],
+                "band_hz": f"{r['band_hz'][0]:.1f}-{r['band_hz'][1]:.1f}",
+                "n_unknowns": r.get("n_unknowns"),
+                "turning_points": r["n_turning_points"],
+                "turning_points_hz": " ".join(f"{x:.2f}" for x in r["turning_points_hz"]),
+                "separated_share": r.get("separated_share"),
+                "n_unstable": r["n_unstable"],
+                "why": CASES[p.name].why,
+            }
+        )
     _write_csv(tables / "robustness_cases.csv", case_rows, tuple(case_rows[0]))
     trows = [row for ch in checks for row in ch["points"]]
     if trows:
-        _write_csv(tables / "hbm_vs_time.csv", trows,
-                   ("model", "why", "freq_hz", "hill_stable", "hbm_amplitude", "ti_amplitude",
-                    "diff_pct", "n_hbm_solutions", "nearest_hbm_amplitude",
-                    "diff_nearest_pct", "hbm_h1", "ti_h1", "ti_periods", "ti_converged"))
+        _write_csv(
+            tables / "hbm_vs_time.csv",
+            trows,
+            (
+                "model",
+                "why",
+                "freq_hz",
+                "hill_stable",
+                "hbm_amplitude",
+                "ti_amplitude",
+                "diff_pct",
+                "n_hbm_solutions",
+                "nearest_hbm_amplitude",
+                "diff_nearest_pct",
+                "hbm_h1",
+                "ti_h1",
+                "ti_periods",
+                "ti_converged",
+            ),
+        )
     write_json(out / "time_check.json", checks)
 
     # figures
@@ -240,8 +339,7 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
 
     figs = out / "figures"
     t0 = time.perf_counter()
-    plot_failure_map(cells, list(spec.methods), list(spec.hard_cases),
-                     figs / "robustness_map.png")
+    plot_failure_map(cells, list(spec.methods), list(spec.hard_cases), figs / "robustness_map.png")
     plot_branches(cells, list(spec.hard_cases), figs / "robustness_curves.png")
     if checks:
         plot_hbm_vs_time(checks, figs / "hbm_vs_time.png")
@@ -250,25 +348,37 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     summary = _summary(spec, cells, checks)
     sections = _sections(spec, cells, checks, summary)
     timings["total"] = time.perf_counter() - t_start
-    write_manifest_and_report(out, spec, "robustness study: solution methods x hard cases,",
-                              summary["headline"], timings, sections)
-    summary.update(out=str(out), report=str(out / "report.html"),
-                   timings_s={k: round(v, 2) for k, v in timings.items()})
+    write_manifest_and_report(
+        out,
+        spec,
+        "robustness study: solution methods x hard cases,",
+        summary["headline"],
+        timings,
+        sections,
+    )
+    summary.update(
+        out=str(out),
+        report=str(out / "report.html"),
+        timings_s={k: round(v, 2) for k, v in timings.items()},
+    )
     write_json(out / "summary.json", summary)
     if summary["reference_failed"]:  # everything is written; the CLI exits with 3
-        raise SolveError(f"the reference method '{spec.methods[0]}' failed on "
-                         + ", ".join(summary["reference_failed"]) + f" (see {out}/report.html)",
-                         partial=summary)
+        raise SolveError(
+            f"the reference method '{spec.methods[0]}' failed on "
+            + ", ".join(summary["reference_failed"])
+            + f" (see {out}/report.html)",
+            partial=summary,
+        )
     return summary
 
 
-def _sections(spec: StudySpec, cells: list[dict], checks: list[dict],
-              summary: dict) -> list[dict]:
+def _sections(spec: StudySpec, cells: list[dict], checks: list[dict], summary: dict) -> list[dict]:
     """The report's sections (written by :mod:`workbench.render.robustness_report`)."""
     from ..render.robustness_report import robustness_sections
 
-    return robustness_sections(spec.peak_tolerance, {m: METHODS[m][1] for m in spec.methods},
-                               ENERGY_TOL, cells, checks)
+    return robustness_sections(
+        spec.peak_tolerance, {m: METHODS[m][1] for m in spec.methods}, ENERGY_TOL, cells, checks
+    )
 
 
 def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str, Any]:
@@ -277,40 +387,75 @@ def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str
     for c in cells:
         counts[c["method"]][c["status"]] += 1
     ref_failed = [c["case"] for c in cells if c["method"] == ref and c["status"] == "failed"]
-    head = [f"{len(spec.methods)} methods x {len(spec.hard_cases)} hard cases = {len(cells)} "
-            f"solves; reference method '{ref}'."]
-    head.append(f"The reference method failed on: {', '.join(ref_failed)}." if ref_failed
-                else f"The reference method '{ref}' reached the band end on every hard case.")
+    head = [
+        f"{len(spec.methods)} methods x {len(spec.hard_cases)} hard cases = {len(cells)} "
+        f"solves; reference method '{ref}'."
+    ]
+    head.append(
+        f"The reference method failed on: {', '.join(ref_failed)}."
+        if ref_failed
+        else f"The reference method '{ref}' reached the band end on every hard case."
+    )
     for m in spec.methods:
         k = counts[m]
-        head.append(f"{m}: {k['ok']} ok, {k['wrong']} wrong answer, {k['failed']} failed; "
-                    f"{sum(c['newton_its'] for c in cells if c['method'] == m)} Newton "
-                    f"iterations, {sum(c['wall_s'] for c in cells if c['method'] == m):.1f} s")
+        head.append(
+            f"{m}: {k['ok']} ok, {k['wrong']} wrong answer, {k['failed']} failed; "
+            f"{sum(c['newton_its'] for c in cells if c['method'] == m)} Newton "
+            f"iterations, {sum(c['wall_s'] for c in cells if c['method'] == m):.1f} s"
+        )
     rows = [r for ch in checks for r in ch["points"] if r["hill_stable"] and r["ti_converged"]]
     if rows:
         head.append(
             f"HBM vs time integration at {len(rows)} Hill-stable suspect points: largest "
             f"amplitude difference {max(abs(r['diff_pct']) for r in rows):.3g} % to the "
             f"starting HBM orbit, {max(abs(r['diff_nearest_pct']) for r in rows):.3g} % to the "
-            "nearest HBM solution at the same frequency.")
+            "nearest HBM solution at the same frequency."
+        )
     bad = [r for ch in checks for r in ch["points"] if not r["hill_stable"]]
     if bad:
-        head.append(f"At {len(bad)} Hill-unstable point(s) the time integration left the HBM "
-                    "orbit: " + "; ".join(f"{r['model']} at {r['freq_hz']:.4g} Hz: "
-                                          f"{r['diff_pct']:+.3g} %"
-                                          + ("" if r["ti_converged"] else " (not periodic)")
-                                          for r in bad) + ".")
-    return {"study": spec.name, "kind": "robustness", "reference": ref, "counts": counts,
-            "reference_failed": ref_failed, "headline": head,
-            "cells": [{k: c.get(k) for k in _CELL_COLS} for c in cells],
-            "time_check": [{k: v for k, v in r.items()} for ch in checks for r in ch["points"]]}
+        head.append(
+            f"At {len(bad)} Hill-unstable point(s) the time integration left the HBM "
+            "orbit: "
+            + "; ".join(
+                f"{r['model']} at {r['freq_hz']:.4g} Hz: "
+                f"{r['diff_pct']:+.3g} %" + ("" if r["ti_converged"] else " (not periodic)")
+                for r in bad
+            )
+            + "."
+        )
+    return {
+        "study": spec.name,
+        "kind": "robustness",
+        "reference": ref,
+        "counts": counts,
+        "reference_failed": ref_failed,
+        "headline": head,
+        "cells": [{k: c.get(k) for k in _CELL_COLS} for c in cells],
+        "time_check": [{k: v for k, v in r.items()} for ch in checks for r in ch["points"]],
+    }
 
 
-__all__ = ["METHODS", "CASES", "TIME_MODELS", "run_robustness", "method_map", "run_cell",
-           "turning_points", "time_check", "time_checks", "Problem", "method_options",
-           # moved to studies/robustness_time.py; kept importable from here
-           "TimeModel", "branch_amplitudes_at", "compare_with_branch", "suspect_points",
-           # named in workbench/study_options.py, next to the options that list them
-           "HardCase",
-           # a cell's solve and verdict: studies/robustness_cells.py
-           "ENERGY_TOL", "STATUSES", "classify"]
+__all__ = [
+    "METHODS",
+    "CASES",
+    "TIME_MODELS",
+    "run_robustness",
+    "method_map",
+    "run_cell",
+    "turning_points",
+    "time_check",
+    "time_checks",
+    "Problem",
+    "method_options",
+    # moved to studies/robustness_time.py; kept importable from here
+    "TimeModel",
+    "branch_amplitudes_at",
+    "compare_with_branch",
+    "suspect_points",
+    # named in workbench/study_options.py, next to the options that list them
+    "HardCase",
+    # a cell's solve and verdict: studies/robustness_cells.py
+    "ENERGY_TOL",
+    "STATUSES",
+    "classify",
+]

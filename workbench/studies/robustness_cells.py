@@ -72,8 +72,14 @@ def _cell_key(problem: Problem, method: str) -> str:
     from ..config import record_to_dict
     from .plan import _SOLVER_CODE
 
-    return digest({"problem": problem.key, "method": method, "options": record_to_dict(opts),
-                   "code": _SOLVER_CODE()})
+    return digest(
+        {
+            "problem": problem.key,
+            "method": method,
+            "options": record_to_dict(opts),
+            "code": _SOLVER_CODE(),
+        }
+    )
 
 
 def run_cell(problem: Problem, method: str) -> dict[str, Any]:
@@ -85,32 +91,57 @@ def run_cell(problem: Problem, method: str) -> dict[str, Any]:
     t0 = time.perf_counter()
     branch, error = None, ""
     try:
-        branch = frequency_response(system, f1, problem.level, band, outputs=outputs,
-                                    harmonics=problem.harmonics, nt=problem.nt, options=opts,
-                                    output_names=names, label=f"{problem.name} / {method}")
+        branch = frequency_response(
+            system,
+            f1,
+            problem.level,
+            band,
+            outputs=outputs,
+            harmonics=problem.harmonics,
+            nt=problem.nt,
+            options=opts,
+            output_names=names,
+            label=f"{problem.name} / {method}",
+        )
     except (SolveError, RuntimeError, ArithmeticError, np.linalg.LinAlgError) as e:
         # a method that crashes has failed: say how, do not stop the study
         log.warning("%s / %s raised %s: %s", problem.name, method, type(e).__name__, e)
         error = f"raised {type(e).__name__}: {e}"
     wall = time.perf_counter() - t0
-    rec: dict[str, Any] = {"case": problem.name, "method": method, "wall_s": wall,
-                           "band_hz": [float(band[0]), float(band[1])]}
+    rec: dict[str, Any] = {
+        "case": problem.name,
+        "method": method,
+        "wall_s": wall,
+        "band_hz": [float(band[0]), float(band[1])],
+    }
     if branch is None:
-        rec.update(failed=True, completed=False, message=error, n_points=0, newton_its=0,
-                   freq_hz=[], amp=[], stable=[])
+        rec.update(
+            failed=True,
+            completed=False,
+            message=error,
+            n_points=0,
+            newton_its=0,
+            freq_hz=[],
+            amp=[],
+            stable=[],
+        )
     else:
         s = branch.summary()
-        rec.update(failed=bool(branch.failed), completed=bool(branch.completed),
-                   message=branch.message, n_points=branch.n_points,
-                   newton_its=int(s["newton_its"]),
-                   energy_residual_max=s["energy_residual_max"],
-                   n_unknowns=int(branch.stats.get("n_unknowns", 0)),
-                   n_snes_failed=int(branch.stats.get("n_failed", 0)),
-                   freq_hz=branch.freq_hz.tolist(), amp=branch.out_amp[:, 0].tolist()
-                   if branch.n_points else [], stable=branch.stable.tolist(),
-                   max_status=int(branch.status.max()) if branch.status.size else 0,
-                   separated_share=float(np.mean(branch.status >= 2))
-                   if branch.status.size else 0.0)
+        rec.update(
+            failed=bool(branch.failed),
+            completed=bool(branch.completed),
+            message=branch.message,
+            n_points=branch.n_points,
+            newton_its=int(s["newton_its"]),
+            energy_residual_max=s["energy_residual_max"],
+            n_unknowns=int(branch.stats.get("n_unknowns", 0)),
+            n_snes_failed=int(branch.stats.get("n_failed", 0)),
+            freq_hz=branch.freq_hz.tolist(),
+            amp=branch.out_amp[:, 0].tolist() if branch.n_points else [],
+            stable=branch.stable.tolist(),
+            max_status=int(branch.status.max()) if branch.status.size else 0,
+            separated_share=float(np.mean(branch.status >= 2)) if branch.status.size else 0.0,
+        )
     return _describe(rec)
 
 
@@ -140,19 +171,20 @@ def classify(cells: list[dict[str, Any]], reference: str, tol_pct: float) -> Non
         c["amp_dev_pct"] = c["freq_dev_pct"] = None
         if c["succeeded"] and r is not None and r["succeeded"] and c is not r:
             lo, hi = c["band_hz"]
-            c["amp_dev_pct"] = 100.0 * (c["peak_amplitude"] - r["peak_amplitude"]) / abs(
-                r["peak_amplitude"])
-            c["freq_dev_pct"] = 100.0 * (c["peak_frequency_hz"] - r["peak_frequency_hz"]) / (
-                hi - lo)
+            c["amp_dev_pct"] = (
+                100.0 * (c["peak_amplitude"] - r["peak_amplitude"]) / abs(r["peak_amplitude"])
+            )
+            c["freq_dev_pct"] = (
+                100.0 * (c["peak_frequency_hz"] - r["peak_frequency_hz"]) / (hi - lo)
+            )
         er = c.get("energy_residual_max")
         if not c["succeeded"]:
             c["status"] = "failed"
         elif (c["amp_dev_pct"] is not None and abs(c["amp_dev_pct"]) > tol_pct) or (
-                er is not None and er > ENERGY_TOL):
+            er is not None and er > ENERGY_TOL
+        ):
             c["status"] = "wrong"
         else:
             c["status"] = "ok"
         c["reference"] = c["method"] == reference
         c["reference_ok"] = bool(r is not None and r["succeeded"])
-
-

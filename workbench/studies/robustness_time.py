@@ -63,13 +63,20 @@ def _sdof_light():
 
 TIME_MODELS: dict[str, TimeModel] = {
     "two-dof-separating": TimeModel(
-        _two_dof, 3.0, tuple(range(6)),
+        _two_dof,
+        3.0,
+        tuple(range(6)),
         "two-DOF 3-D contact example (harmonics 0-5, as its study file), damping 0.5 %, "
-        "level 3 N: separation, turning points and Hill-unstable pieces"),
+        "level 3 N: separation, turning points and Hill-unstable pieces",
+    ),
     "sdof-light-damping": TimeModel(
-        _sdof_light, 1.0, tuple(range(8)),
+        _sdof_light,
+        1.0,
+        tuple(range(8)),
         "single-DOF Jenkins oscillator with damping 0.01 % (the lightest damping)",
-        max_periods=6000, tol=1e-6),
+        max_periods=6000,
+        tol=1e-6,
+    ),
 }
 
 
@@ -108,33 +115,79 @@ def time_check(name: str, tm: TimeModel) -> dict[str, Any]:
     ex = tm.build()
     opts = SolverOptions()
     t0 = time.perf_counter()
-    b = frequency_response(ex.system, ex.f1, tm.level, ex.band_hz, outputs=ex.outputs,
-                           harmonics=tm.harmonics, options=opts, label=f"time check {name}")
-    hb = HarmonicBalance(ex.system, ex.f1, Fourier(b.harmonics, b.nt), ex.outputs, tm.level,
-                         opts.space, opts.backend, opts.dc_anchor)
+    b = frequency_response(
+        ex.system,
+        ex.f1,
+        tm.level,
+        ex.band_hz,
+        outputs=ex.outputs,
+        harmonics=tm.harmonics,
+        options=opts,
+        label=f"time check {name}",
+    )
+    hb = HarmonicBalance(
+        ex.system,
+        ex.f1,
+        Fourier(b.harmonics, b.nt),
+        ex.outputs,
+        tm.level,
+        opts.space,
+        opts.backend,
+        opts.dc_anchor,
+    )
     rows = []
     for i, why in suspect_points(b.freq_hz, b.out_amp[:, 0], b.stable, b.status):
         w = 2 * np.pi * b.freq_hz[i]
         q0, v0 = hb.fourier.state_at(hb.response(b.x[i], w), w)
         ts = time.perf_counter()
         try:
-            tr = time_response(ex.system, ex.f1, tm.level, b.freq_hz[i], ex.outputs,
-                               harmonics=tm.harmonics, steps_per_period=tm.steps_per_period,
-                               max_periods=tm.max_periods, tol=tm.tol, q0=q0, v0=v0)
+            tr = time_response(
+                ex.system,
+                ex.f1,
+                tm.level,
+                b.freq_hz[i],
+                ex.outputs,
+                harmonics=tm.harmonics,
+                steps_per_period=tm.steps_per_period,
+                max_periods=tm.max_periods,
+                tol=tm.tol,
+                q0=q0,
+                v0=v0,
+            )
         except SolveError as e:  # not periodic within max_periods: keep the last period
             tr = e.partial
         a_hbm, a_ti = float(b.out_amp[i, 0]), float(tr.amplitude[0])
-        rows.append({
-            "model": name, "point": i, "why": why, "freq_hz": float(b.freq_hz[i]),
-            "hill_stable": bool(b.stable[i]), "hbm_amplitude": a_hbm, "ti_amplitude": a_ti,
-            "diff_pct": 100.0 * (a_ti - a_hbm) / a_hbm,
-            "hbm_h1": float(b.out_h1[i, 0]), "ti_h1": float(tr.h1_amplitude[0]),
-            "ti_periods": int(tr.periods), "ti_converged": bool(tr.converged),
-            "ti_s": time.perf_counter() - ts})
-    return {"model": name, "why": tm.why, "level": tm.level, "n_dofs": ex.system.n,
-            "harmonics": list(tm.harmonics), "failed": bool(b.failed), "message": b.message,
-            "freq_hz": b.freq_hz.tolist(), "amp": b.out_amp[:, 0].tolist(),
-            "stable": b.stable.tolist(), "points": rows, "wall_s": time.perf_counter() - t0}
+        rows.append(
+            {
+                "model": name,
+                "point": i,
+                "why": why,
+                "freq_hz": float(b.freq_hz[i]),
+                "hill_stable": bool(b.stable[i]),
+                "hbm_amplitude": a_hbm,
+                "ti_amplitude": a_ti,
+                "diff_pct": 100.0 * (a_ti - a_hbm) / a_hbm,
+                "hbm_h1": float(b.out_h1[i, 0]),
+                "ti_h1": float(tr.h1_amplitude[0]),
+                "ti_periods": int(tr.periods),
+                "ti_converged": bool(tr.converged),
+                "ti_s": time.perf_counter() - ts,
+            }
+        )
+    return {
+        "model": name,
+        "why": tm.why,
+        "level": tm.level,
+        "n_dofs": ex.system.n,
+        "harmonics": list(tm.harmonics),
+        "failed": bool(b.failed),
+        "message": b.message,
+        "freq_hz": b.freq_hz.tolist(),
+        "amp": b.out_amp[:, 0].tolist(),
+        "stable": b.stable.tolist(),
+        "points": rows,
+        "wall_s": time.perf_counter() - t0,
+    }
 
 
 def branch_amplitudes_at(freq_hz, amp, fq: float) -> np.ndarray:
@@ -169,19 +222,30 @@ def compare_with_branch(check: dict[str, Any]) -> None:
         r["diff_nearest_pct"] = 100.0 * (r["ti_amplitude"] - cands[k]) / cands[k]
 
 
-def time_checks(cache_dir: Path | None, *, force: bool = False,
-                names: list[str] | None = None) -> list[dict[str, Any]]:
+def time_checks(
+    cache_dir: Path | None, *, force: bool = False, names: list[str] | None = None
+) -> list[dict[str, Any]]:
     """:func:`time_check` of every model of :data:`TIME_MODELS` (cached), with a progress bar."""
     from ..log import progress
     from .plan import _SOLVER_CODE
 
     out = []
-    for name in progress(names or list(TIME_MODELS), "robustness: HBM vs time integration",
-                         unit="model"):
+    for name in progress(
+        names or list(TIME_MODELS), "robustness: HBM vs time integration", unit="model"
+    ):
         tm = TIME_MODELS[name]
-        key = digest({"time-check": name, "level": tm.level, "harmonics": tm.harmonics,
-                      "why": tm.why, "max_periods": tm.max_periods, "tol": tm.tol,
-                      "spp": tm.steps_per_period, "code": _SOLVER_CODE()})
+        key = digest(
+            {
+                "time-check": name,
+                "level": tm.level,
+                "harmonics": tm.harmonics,
+                "why": tm.why,
+                "max_periods": tm.max_periods,
+                "tol": tm.tol,
+                "spp": tm.steps_per_period,
+                "code": _SOLVER_CODE(),
+            }
+        )
         path = None if cache_dir is None else cache_dir / f"time-{name}-{key}.json"
         if path is not None and path.is_file() and not force:
             import json

@@ -127,8 +127,12 @@ def geometry_request(case: Case) -> dict[str, Any]:
     for option, (name, kind) in get_shape(case.damper).study_options.items():
         if s.get(option) is not None:
             overrides.setdefault(case.damper, {})[name] = kind(s[option])
-    return {"damper": case.damper, "geometry_file": s.get("geometry"),
-            "size_mm": s.get("mesh-size"), "overrides": overrides or None}
+    return {
+        "damper": case.damper,
+        "geometry_file": s.get("geometry"),
+        "size_mm": s.get("mesh-size"),
+        "overrides": overrides or None,
+    }
 
 
 def contact_params_for(case: Case):
@@ -136,10 +140,14 @@ def contact_params_for(case: Case):
 
     s = case.settings
     return load_contact_params(
-        geometry_file=s.get("geometry"), mu=s.get("mu"), cf_n=s.get("cf"),
+        geometry_file=s.get("geometry"),
+        mu=s.get("mu"),
+        cf_n=s.get("cf"),
         kt_line_n_per_m2=s.get("kt-line"),
-        kn_line_n_per_m2=s.get("kn-line"), kt_face_n_per_m3=s.get("kt-face"),
-        kn_face_n_per_m3=s.get("kn-face"))
+        kn_line_n_per_m2=s.get("kn-line"),
+        kt_face_n_per_m3=s.get("kt-face"),
+        kn_face_n_per_m3=s.get("kn-face"),
+    )
 
 
 def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> PreparedModel:
@@ -165,8 +173,14 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
         t0 = time.time()
         with stage(timings, f"reduction {body}"):
             reduced[body] = reduce_body(
-                geom, body, n_modes=s["modes"], rigid=s["rigid-damper"] and body == "damper",
-                cache_dir=fe_dir, comm=comm, force=force)
+                geom,
+                body,
+                n_modes=s["modes"],
+                rigid=s["rigid-damper"] and body == "damper",
+                cache_dir=fe_dir,
+                comm=comm,
+                force=force,
+            )
         rm = reduced[body]
         if _older(model_path(fe_dir, rm.inputs, rm.digest), t0):
             cached[f"reduction {body}"] = float(rm.timings.get("total", 0.0))
@@ -174,11 +188,18 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
     with stage(timings, "assembly"):
         beta = float(geom.params["rig"]["platform"]["angle_deg"])
         cparams = contact_params_for(case)
-        model = assemble(rig, damper, geom.contact, cparams, beta_deg=beta,
-                         excitation_direction=tuple(geom.excitation_direction),
-                         response_direction=tuple(geom.response_direction))
-        contacts = ContactElements(W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt,
-                                   kn=model.kn, n0=model.n0)
+        model = assemble(
+            rig,
+            damper,
+            geom.contact,
+            cparams,
+            beta_deg=beta,
+            excitation_direction=tuple(geom.excitation_direction),
+            response_direction=tuple(geom.response_direction),
+        )
+        contacts = ContactElements(
+            W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt, kn=model.kn, n0=model.n0
+        )
         system = System(M=model.M, K=model.K, zeta=s["damping"], contacts=contacts)
     return PreparedModel(geom, gdir, model, system, {}, timings, cparams, cached)
 
@@ -201,24 +222,34 @@ def load_geometry(case: Case, out: Path):
     from ..geometry import build_geometry
 
     req = geometry_request(case)
-    return build_geometry(req["damper"], geometry_dir(case, out),
-                          geometry_file=req["geometry_file"], size_mm=req["size_mm"],
-                          overrides=req["overrides"])
+    return build_geometry(
+        req["damper"],
+        geometry_dir(case, out),
+        geometry_file=req["geometry_file"],
+        size_mm=req["size_mm"],
+        overrides=req["overrides"],
+    )
 
 
 def band_for(prep: PreparedModel, case: Case) -> tuple[float, float]:
     """The case's frequency band: given in the study, or automatic for its family."""
     s = case.settings
     fam = case.phase_deg % 360.0
-    given = (s["band-in-phase"] if abs(fam) < 1e-9 else
-             s["band-out-of-phase"] if abs(fam - 180.0) < 1e-9 else [])
+    given = (
+        s["band-in-phase"]
+        if abs(fam) < 1e-9
+        else s["band-out-of-phase"]
+        if abs(fam - 180.0) < 1e-9
+        else []
+    )
     if given:
         return float(given[0]), float(given[1])
     if case.phase_deg not in prep.bands:
         from ..assembly.linear import auto_band
 
-        prep.bands[case.phase_deg] = auto_band(prep.assembled, case.phase_deg,
-                                               s["band-margin"], s["response-blade"])
+        prep.bands[case.phase_deg] = auto_band(
+            prep.assembled, case.phase_deg, s["band-margin"], s["response-blade"]
+        )
     lo, hi, _ = prep.bands[case.phase_deg]
     return lo, hi
 
@@ -235,15 +266,31 @@ def solve_case(prep: PreparedModel, case: Case) -> CaseResult:
     opts = SolverOptions(stability=s["stability"], max_points=s["max-points"])
     blade = s["response-blade"]
     branch = frequency_response(
-        prep.system, model.excitation(case.phase_deg), case.force_n, band,
-        outputs=model.response_dofs[blade - 1: blade], harmonics=tuple(s["harmonics"]),
-        nt=s["nt"], options=opts, output_names=(f"blade{blade}_x",), label=case.name)
+        prep.system,
+        model.excitation(case.phase_deg),
+        case.force_n,
+        band,
+        outputs=model.response_dofs[blade - 1 : blade],
+        harmonics=tuple(s["harmonics"]),
+        nt=s["nt"],
+        options=opts,
+        output_names=(f"blade{blade}_x",),
+        label=case.name,
+    )
     timings = dict(prep.timings)
     timings["hbm"] = time.perf_counter() - t0
     return CaseResult(
-        damper=case.damper, phase_deg=case.phase_deg, force_n=case.force_n, branch=branch,
-        points=model.contact.points, side=model.contact.side, variant=case.variant,
-        params={**case.settings, "band_hz": list(band)}, digest=case.digest, timings=timings)
+        damper=case.damper,
+        phase_deg=case.phase_deg,
+        force_n=case.force_n,
+        branch=branch,
+        points=model.contact.points,
+        side=model.contact.side,
+        variant=case.variant,
+        params={**case.settings, "band_hz": list(band)},
+        digest=case.digest,
+        timings=timings,
+    )
 
 
 def _cost(case: Case, prepared: dict[str, PreparedModel]) -> float:
@@ -289,8 +336,13 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     mine = [c for i, c in enumerate(order) if i % size == rank]
     failures: list[str] = []
     if todo:
-        log.info("%d of %d cases to compute (%d cached)%s", len(todo), len(cases),
-                 len(cases) - len(todo), f", {len(mine)} on rank {rank}" if size > 1 else "")
+        log.info(
+            "%d of %d cases to compute (%d cached)%s",
+            len(todo),
+            len(cases),
+            len(cases) - len(todo),
+            f", {len(mine)} on rank {rank}" if size > 1 else "",
+        )
     t_cases = time.perf_counter()
     with progress_bar(f"{spec.name}: cases", total=len(mine), unit="case") as bar:
         for k, c in enumerate(mine):
@@ -299,14 +351,24 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
             res.save(case_dir / f"{c.digest}.h5")
             if res.branch.failed:
                 failures.append(f"{c.name}: {res.branch.message}")
-                log.warning("case %s stopped early: %s (its %d points are kept)", c.name,
-                            res.branch.message, res.branch.n_points)
+                log.warning(
+                    "case %s stopped early: %s (its %d points are kept)",
+                    c.name,
+                    res.branch.message,
+                    res.branch.n_points,
+                )
             elif not res.peak_covered:
                 log.warning("case %s: %s", c.name, res.peak_note())
             bar.update(1)
             if not bars_enabled():
-                log.info("case %d/%d done: %s (%d points, %.1f s)", k + 1, len(mine), c.name,
-                         res.branch.n_points, res.timings["hbm"])
+                log.info(
+                    "case %d/%d done: %s (%d points, %.1f s)",
+                    k + 1,
+                    len(mine),
+                    c.name,
+                    res.branch.n_points,
+                    res.timings["hbm"],
+                )
     timings["cases (wall)"] = time.perf_counter() - t_cases
     # one picture set per damper, of the first model of that damper in plan order (a sweep
     # prepares several models of one damper: the report shows the first, so the others need
@@ -316,11 +378,14 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     t_pic = time.perf_counter()
     made = False
     for c in cases:
-        if c.damper in {x.damper for x in cases[:cases.index(c)]}:
+        if c.damper in {x.damper for x in cases[: cases.index(c)]}:
             continue
         prep = prepared.get(c.model_digest)
-        geom, cparams = ((prep.geometry, prep.contact_params) if prep is not None else
-                         (load_geometry(c, out), contact_params_for(c)))
+        geom, cparams = (
+            (prep.geometry, prep.contact_params)
+            if prep is not None
+            else (load_geometry(c, out), contact_params_for(c))
+        )
         cost = model_pictures(geom, cparams, out, comm=comm)
         if cost is None:
             old = _picture_cost(out, c.damper)
@@ -342,9 +407,12 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     nl_res = _nonlinear_modes(spec, out, prepared, cases, comm, timings)
 
     # 3. gather, post-process and report on rank 0
-    results = StudyResults(name=spec.name, kind=spec.kind,
-                           cases=[CaseResult.load(case_dir / f"{c.digest}.h5") for c in cases],
-                           inputs=spec.as_dict())
+    results = StudyResults(
+        name=spec.name,
+        kind=spec.kind,
+        cases=[CaseResult.load(case_dir / f"{c.digest}.h5") for c in cases],
+        inputs=spec.as_dict(),
+    )
     if rank == 0:
         _add_cached_costs(out, cases, todo, prepared, results, cached_costs)
     results.timings = timings
@@ -352,7 +420,8 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     if rank == 0:
         t_post = time.perf_counter()
         results.extras["bands"] = {
-            md: {str(ph): list(b) for ph, b in p.bands.items()} for md, p in prepared.items()}
+            md: {str(ph): list(b) for ph, b in p.bands.items()} for md, p in prepared.items()
+        }
         results.extras["failures"] = failures
         results.extras["screen"] = screen_rows
         if nl_res is not None:
@@ -389,7 +458,8 @@ def model_pictures(geometry, contact_params, out: Path, *, comm=None) -> float |
     if rank == 0:
         try:
             fresh = json.loads(stamp.read_text()).get("key") == key and all(
-                (figs / f"{k}_{damper}.png").is_file() for k in ("model", "modes"))
+                (figs / f"{k}_{damper}.png").is_file() for k in ("model", "modes")
+            )
         except (OSError, ValueError, AttributeError):
             fresh = False
     if comm is not None:
@@ -405,8 +475,7 @@ def model_pictures(geometry, contact_params, out: Path, *, comm=None) -> float |
         from ..render.scene import render_scene
 
         figs.mkdir(parents=True, exist_ok=True)
-        render_scene(geometry, figs / f"model_{damper}.png",
-                     title=f"rig with the {damper} damper")
+        render_scene(geometry, figs / f"model_{damper}.png", title=f"rig with the {damper} damper")
         with tempfile.TemporaryDirectory() as tmp:
             made = [p for p in render_modes(res, tmp, modes=[]) if p.name == "first_bending.png"]
             if made:
@@ -420,8 +489,9 @@ def _picture_cost(out: Path, damper: str) -> float:
     import json
 
     try:
-        return float(json.loads((out / "figures" / f".model_{damper}.json").read_text())
-                     .get("cost_s", 0.0))
+        return float(
+            json.loads((out / "figures" / f".model_{damper}.json").read_text()).get("cost_s", 0.0)
+        )
     except (OSError, ValueError, TypeError, AttributeError):
         return 0.0
 
@@ -429,9 +499,14 @@ def _picture_cost(out: Path, damper: str) -> float:
 COSTS_FILE = "costs.json"
 
 
-def _add_cached_costs(out: Path, cases: list[Case], todo: list[Case],
-                      prepared: dict[str, PreparedModel], results: StudyResults,
-                      cached_costs: dict[str, float]) -> None:
+def _add_cached_costs(
+    out: Path,
+    cases: list[Case],
+    todo: list[Case],
+    prepared: dict[str, PreparedModel],
+    results: StudyResults,
+    cached_costs: dict[str, float],
+) -> None:
     """Fill ``cached_costs`` (stage -> s) with what the work reused from the cache cost.
 
     A model's stages (geometry, reductions, assembly) cost what the run
@@ -483,8 +558,9 @@ def case_done(case_dir: Path, c: Case) -> bool:
         return False
 
 
-def _nonlinear_modes(spec: StudySpec, out: Path, prepared: dict, cases: list[Case], comm,
-                     timings: dict[str, float]) -> dict | None:
+def _nonlinear_modes(
+    spec: StudySpec, out: Path, prepared: dict, cases: list[Case], comm, timings: dict[str, float]
+) -> dict | None:
     """Backbones and syntheses of a comparison study with ``nonlinear-modes`` (rank 0)."""
     if spec.kind != "comparison" or not getattr(spec, "nonlinear_modes", False):
         return None
@@ -496,6 +572,14 @@ def _nonlinear_modes(spec: StudySpec, out: Path, prepared: dict, cases: list[Cas
     return res
 
 
-__all__ = ["run_study", "prepare_model", "solve_case", "PreparedModel",
-           # written by studies/outputs.py; kept importable from here
-           "check_failures", "headline", "write_manifest_and_report", "write_outputs"]
+__all__ = [
+    "run_study",
+    "prepare_model",
+    "solve_case",
+    "PreparedModel",
+    # written by studies/outputs.py; kept importable from here
+    "check_failures",
+    "headline",
+    "write_manifest_and_report",
+    "write_outputs",
+]

@@ -31,22 +31,38 @@ def rigid_bound_model(prep, case: Case, out: Path, comm=None):
     geom = prep.geometry
     s = case.settings
     rig = reduce_body(geom, "rig", n_modes=s["modes"], cache_dir=out / "cache" / "fe", comm=comm)
-    dmp = reduce_body(geom, "damper", n_modes=0, rigid=True, cache_dir=out / "cache" / "fe",
-                      comm=comm)
+    dmp = reduce_body(
+        geom, "damper", n_modes=0, rigid=True, cache_dir=out / "cache" / "fe", comm=comm
+    )
     beta = float(geom.params["rig"]["platform"]["angle_deg"])
-    return assemble(rig, dmp, geom.contact, prep.contact_params, beta_deg=beta,
-                    excitation_direction=tuple(geom.excitation_direction),
-                    response_direction=tuple(geom.response_direction))
+    return assemble(
+        rig,
+        dmp,
+        geom.contact,
+        prep.contact_params,
+        beta_deg=beta,
+        excitation_direction=tuple(geom.excitation_direction),
+        response_direction=tuple(geom.response_direction),
+    )
 
 
-def screen_prepared(prep, case: Case, phases, out: Path, *, comm=None,
-                    f_max_n: float | None = None) -> list[ScreenResult]:
+def screen_prepared(
+    prep, case: Case, phases, out: Path, *, comm=None, f_max_n: float | None = None
+) -> list[ScreenResult]:
     """The screen of one prepared model (``runner.PreparedModel``) for each phase."""
     s = case.settings
     bound = rigid_bound_model(prep, case, out, comm)
     blade = s["response-blade"]
-    return [screen(linear_pair(prep.assembled, ph, blade), s["damping"], phase_deg=ph,
-                   bound=linear_pair(bound, ph, blade), f_max_n=f_max_n) for ph in phases]
+    return [
+        screen(
+            linear_pair(prep.assembled, ph, blade),
+            s["damping"],
+            phase_deg=ph,
+            bound=linear_pair(bound, ph, blade),
+            f_max_n=f_max_n,
+        )
+        for ph in phases
+    ]
 
 
 def screen_row(case: Case, res: ScreenResult) -> dict[str, Any]:
@@ -59,14 +75,24 @@ def screen_key(case: Case, phases, f_max_n: float) -> str:
     from ..io import code_version, digest
 
     root = Path(__file__).resolve().parents[1]
-    return digest({"model": case.model_digest, "phases": [float(p) for p in phases],
-                   "f_max": float(f_max_n), "blade": case.settings["response-blade"],
-                   "code": [code_version(root / "assembly"),
-                            code_version(root / "studies", ("screening.py",))]}, 16)
+    return digest(
+        {
+            "model": case.model_digest,
+            "phases": [float(p) for p in phases],
+            "f_max": float(f_max_n),
+            "blade": case.settings["response-blade"],
+            "code": [
+                code_version(root / "assembly"),
+                code_version(root / "studies", ("screening.py",)),
+            ],
+        },
+        16,
+    )
 
 
-def study_screens(cases: list[Case], prepared: dict, out: Path, phases, f_max_n: float, *,
-                  comm=None) -> list[dict[str, Any]]:
+def study_screens(
+    cases: list[Case], prepared: dict, out: Path, phases, f_max_n: float, *, comm=None
+) -> list[dict[str, Any]]:
     """Screen rows of every model of a study, cached in ``out/cache/screen/``.
 
     Models already prepared for the study's cases are used as they are; the
@@ -90,8 +116,10 @@ def study_screens(cases: list[Case], prepared: dict, out: Path, phases, f_max_n:
     for md in missing:
         c = models[md]
         prep = prepared.get(md) or prepare_model(c, out, comm=comm)
-        rows = [screen_row(c, r) for r in screen_prepared(prep, c, phases, out, comm=comm,
-                                                          f_max_n=f_max_n)]
+        rows = [
+            screen_row(c, r)
+            for r in screen_prepared(prep, c, phases, out, comm=comm, f_max_n=f_max_n)
+        ]
         if rank == 0:
             write_json(sdir / f"{keys[md]}.json", rows)
     if comm is not None:
@@ -133,5 +161,14 @@ def run_screen(spec: StudySpec, out: str | Path, *, comm=None) -> dict[str, Any]
 
 
 # the table's formatting lives in post/screen_table.py; kept importable from here
-__all__ = ["COLUMNS", "format_cell", "rigid_bound_model", "run_screen", "screen_key",
-           "screen_prepared", "screen_row", "study_screens", "table"]
+__all__ = [
+    "COLUMNS",
+    "format_cell",
+    "rigid_bound_model",
+    "run_screen",
+    "screen_key",
+    "screen_prepared",
+    "screen_row",
+    "study_screens",
+    "table",
+]

@@ -28,16 +28,31 @@ from ..study_options import (
 )
 
 # the options table lives in workbench/study_options.py (plain data the figures read too)
-__all__ = ["BY_NAME", "DAMPERS", "KINDS", "OPTIONS", "ROBUSTNESS_CASES", "ROBUSTNESS_METHODS",
-           "Option", "StudySpec", "add_arguments", "check_option", "cli_values", "load_study",
-           "resolve"]
+__all__ = [
+    "BY_NAME",
+    "DAMPERS",
+    "KINDS",
+    "OPTIONS",
+    "ROBUSTNESS_CASES",
+    "ROBUSTNESS_METHODS",
+    "Option",
+    "StudySpec",
+    "add_arguments",
+    "check_option",
+    "cli_values",
+    "load_study",
+    "resolve",
+]
 
 
 def _fields() -> list[tuple[str, Any, Any]]:
     out = []
     for o in OPTIONS:
-        default = dataclasses.field(default_factory=lambda d=o.default: list(d)) \
-            if isinstance(o.default, list) else o.default
+        default = (
+            dataclasses.field(default_factory=lambda d=o.default: list(d))
+            if isinstance(o.default, list)
+            else o.default
+        )
         out.append((o.attr, Any, default))
     return out
 
@@ -84,8 +99,9 @@ def check_option(o: Option, value: Any) -> Any:
         raise InputError(o.name, value, f"a value ({o.help})")
     k = o.kind
     if k == "percent":  # a float in percent; a trailing '%' is allowed ("1%", "0.5 %")
-        text = value.strip()[:-1] if isinstance(value, str) and value.strip().endswith("%") \
-            else value
+        text = (
+            value.strip()[:-1] if isinstance(value, str) and value.strip().endswith("%") else value
+        )
         try:
             return check_range(o.name, text, o.lo, o.hi, lo_open=o.lo_open, unit="%")
         except InputError as e:  # name the value as the user wrote it
@@ -93,8 +109,9 @@ def check_option(o: Option, value: Any) -> Any:
     if k == "float":
         return check_range(o.name, value, o.lo, o.hi, lo_open=o.lo_open)
     if k == "int":
-        return check_int(o.name, value, None if o.lo is None else int(o.lo),
-                         None if o.hi is None else int(o.hi))
+        return check_int(
+            o.name, value, None if o.lo is None else int(o.lo), None if o.hi is None else int(o.hi)
+        )
     if k == "bool":
         if isinstance(value, bool):
             return value
@@ -122,21 +139,30 @@ def check_option(o: Option, value: Any) -> Any:
     raise AssertionError(k)
 
 
-def resolve(file_values: Mapping[str, Any] | None = None, file_name: str = "",
-            cli_values: Mapping[str, Any] | None = None) -> StudySpec:
+def resolve(
+    file_values: Mapping[str, Any] | None = None,
+    file_name: str = "",
+    cli_values: Mapping[str, Any] | None = None,
+) -> StudySpec:
     """Merge defaults, a study file's values and command-line values into a spec."""
     values: dict[str, Any] = {}
     source: dict[str, str] = {}
     for o in OPTIONS:
         values[o.attr] = o.default if not isinstance(o.default, list) else list(o.default)
         source[o.name] = "default"
-    for origin, given in ((file_name or "study file", file_values or {}),
-                          ("command line", cli_values or {})):
+    for origin, given in (
+        (file_name or "study file", file_values or {}),
+        ("command line", cli_values or {}),
+    ):
         for key, v in given.items():
             if key not in BY_NAME:
                 hint = did_you_mean(key, BY_NAME)
-                raise InputError(key, v, "a study option (see upd study --help)",
-                                 ("unknown key" + (f"; {hint}" if hint else "")) + f" in {origin}")
+                raise InputError(
+                    key,
+                    v,
+                    "a study option (see upd study --help)",
+                    ("unknown key" + (f"; {hint}" if hint else "")) + f" in {origin}",
+                )
             o = BY_NAME[key]
             values[o.attr] = check_option(o, v)
             source[key] = origin
@@ -164,8 +190,12 @@ def _check_consistency(spec: StudySpec) -> None:
     if spec.sweep is not None:
         if spec.sweep not in BY_NAME or BY_NAME[spec.sweep].kind not in ("float", "int"):
             scalars = [o.name for o in OPTIONS if o.kind in ("float", "int")]
-            raise InputError("sweep", spec.sweep, "a numeric option: " + ", ".join(scalars),
-                             did_you_mean(spec.sweep, scalars))
+            raise InputError(
+                "sweep",
+                spec.sweep,
+                "a numeric option: " + ", ".join(scalars),
+                did_you_mean(spec.sweep, scalars),
+            )
         if not spec.sweep_values:
             raise InputError("sweep-values", spec.sweep_values, "at least one value")
         for i, v in enumerate(spec.sweep_values):
@@ -177,8 +207,9 @@ def load_study(path: str | Path | None, cli_values: Mapping[str, Any] | None = N
     file_values = read_toml(path) if path is not None else {}
     for key, v in file_values.items():
         if isinstance(v, dict):
-            raise InputError(key, f"[{key}] table", "top-level keys named like the "
-                             "upd study options (no tables)")
+            raise InputError(
+                key, f"[{key}] table", "top-level keys named like the upd study options (no tables)"
+            )
         o = BY_NAME.get(key)
         if o is not None:
             check_toml_type(o, v, str(path))
@@ -189,16 +220,23 @@ def load_study(path: str | Path | None, cli_values: Mapping[str, Any] | None = N
 
 
 _TOML_TYPES = {
-    "float": ("a number", (int, float)), "int": ("a whole number", (int,)),
-    "bool": ("true or false", (bool,)), "str": ("a string", (str,)),
-    "path": ("a string (a file name)", (str,)), "percent": ("a number or a string like '1%'",
-                                                            (int, float, str)),
+    "float": ("a number", (int, float)),
+    "int": ("a whole number", (int,)),
+    "bool": ("true or false", (bool,)),
+    "str": ("a string", (str,)),
+    "path": ("a string (a file name)", (str,)),
+    "percent": ("a number or a string like '1%'", (int, float, str)),
 }
 
 
 def _toml_type(v: Any) -> str:
-    return {bool: "a boolean", int: "a whole number", float: "a number", str: "a string",
-            list: "an array"}.get(type(v), type(v).__name__)
+    return {
+        bool: "a boolean",
+        int: "a whole number",
+        float: "a number",
+        str: "a string",
+        list: "an array",
+    }.get(type(v), type(v).__name__)
 
 
 def check_toml_type(o: Option, value: Any, where: str) -> None:
@@ -209,19 +247,31 @@ def check_toml_type(o: Option, value: Any, where: str) -> None:
     command line, whose values are text, is parsed by :func:`check_option`.
     """
     if o.kind in ("floats", "ints", "strs"):
-        item = {"floats": ("numbers", (int, float), "a number"),
-                "ints": ("whole numbers", (int,), "a whole number"),
-                "strs": ("strings", (str,), "a string")}[o.kind]
-        example = (f'["{value}"]' if o.kind == "strs" else f"[{value}]") \
-            if isinstance(value, (str, int, float)) and not isinstance(value, bool) else \
-            {"floats": "[180.0]", "ints": "[0, 1]", "strs": '["cone"]'}[o.kind]
+        item = {
+            "floats": ("numbers", (int, float), "a number"),
+            "ints": ("whole numbers", (int,), "a whole number"),
+            "strs": ("strings", (str,), "a string"),
+        }[o.kind]
+        example = (
+            (f'["{value}"]' if o.kind == "strs" else f"[{value}]")
+            if isinstance(value, (str, int, float)) and not isinstance(value, bool)
+            else {"floats": "[180.0]", "ints": "[0, 1]", "strs": '["cone"]'}[o.kind]
+        )
         if not isinstance(value, list):
-            raise InputError(o.name, value, f"a TOML array of {item[0]}, e.g. {o.name} = "
-                             f"{example}", f"{_toml_type(value)} in {where}")
+            raise InputError(
+                o.name,
+                value,
+                f"a TOML array of {item[0]}, e.g. {o.name} = {example}",
+                f"{_toml_type(value)} in {where}",
+            )
         for i, v in enumerate(value):
             if isinstance(v, bool) or not isinstance(v, item[1]):
-                raise InputError(f"{o.name}[{i}]", v, f"{item[2]} (each item of {o.name})",
-                                 f"{_toml_type(v)} in {where}")
+                raise InputError(
+                    f"{o.name}[{i}]",
+                    v,
+                    f"{item[2]} (each item of {o.name})",
+                    f"{_toml_type(v)} in {where}",
+                )
         return
     name, types = _TOML_TYPES[o.kind]
     if (isinstance(value, bool) and o.kind != "bool") or not isinstance(value, types):
@@ -235,16 +285,34 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         g = groups.setdefault(o.group, parser.add_argument_group(f"{o.group} options"))
         default = "" if o.default in (None, []) else f" [default: {_fmt_default(o.default)}]"
         if o.kind == "bool":
-            g.add_argument(f"--{o.name}", dest=o.attr, default=argparse.SUPPRESS,
-                           action=argparse.BooleanOptionalAction, help=o.help + default)
+            g.add_argument(
+                f"--{o.name}",
+                dest=o.attr,
+                default=argparse.SUPPRESS,
+                action=argparse.BooleanOptionalAction,
+                help=o.help + default,
+            )
         else:
-            g.add_argument(f"--{o.name}", dest=o.attr, default=argparse.SUPPRESS,
-                           metavar=_metavar(o), help=o.help + default)
+            g.add_argument(
+                f"--{o.name}",
+                dest=o.attr,
+                default=argparse.SUPPRESS,
+                metavar=_metavar(o),
+                help=o.help + default,
+            )
 
 
 def _metavar(o: Option) -> str:
-    return {"floats": "X,Y,...", "ints": "I,J,...", "strs": "A,B,...", "float": "X",
-            "int": "N", "path": "FILE", "str": "TEXT", "percent": "X[%]"}[o.kind]
+    return {
+        "floats": "X,Y,...",
+        "ints": "I,J,...",
+        "strs": "A,B,...",
+        "float": "X",
+        "int": "N",
+        "path": "FILE",
+        "str": "TEXT",
+        "percent": "X[%]",
+    }[o.kind]
 
 
 def _fmt_default(v: Any) -> str:

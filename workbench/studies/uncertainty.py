@@ -99,8 +99,6 @@ from .uq_schedule import (
 log = logging.getLogger(__name__)
 
 
-
-
 # ---- the study --------------------------------------------------------------------------
 
 
@@ -127,9 +125,15 @@ def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) ->
     want = set(todo_ids)
     todo = [s for s in samples if s.case.digest in want]
     todo = list({s.case.digest: s for s in todo}.values())  # equal rows solve once
-    log.info("%d samples (%d dampers x %d families x %d design rows): %d to compute, "
-             "%d cached", len(samples), len(spec.dampers), len(spec.phases), design.n_rows,
-             len(todo), len(samples) - len(todo))
+    log.info(
+        "%d samples (%d dampers x %d families x %d design rows): %d to compute, %d cached",
+        len(samples),
+        len(spec.dampers),
+        len(spec.phases),
+        design.n_rows,
+        len(todo),
+        len(samples) - len(todo),
+    )
 
     # 1. one base model per damper (nominal inputs): geometry, reduction, assembly
     t0 = time.perf_counter()
@@ -153,24 +157,49 @@ def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) ->
         if res.branch.failed:
             log.warning("sample %s stopped early: %s", s.case.name, res.branch.message)
         if not bars_enabled():
-            log.info("sample %d/%d on rank %d: %s (%.1f s)", k + 1, len(order), rank,
-                     s.case.name, res.timings.get("hbm", 0.0))
-        return {"digest": s.case.digest, "hbm_s": float(res.timings.get("hbm", 0.0)),
-                "cpu_s": float(res.timings["hbm_cpu"]),
-                "failed": bool(res.branch.failed)}
+            log.info(
+                "sample %d/%d on rank %d: %s (%.1f s)",
+                k + 1,
+                len(order),
+                rank,
+                s.case.name,
+                res.timings.get("hbm", 0.0),
+            )
+        return {
+            "digest": s.case.digest,
+            "hbm_s": float(res.timings.get("hbm", 0.0)),
+            "cpu_s": float(res.timings["hbm_cpu"]),
+            "failed": bool(res.branch.failed),
+        }
 
     t0 = time.perf_counter()
-    records = run_tasks(len(order), work, comm, static=spec.uq_schedule == "static",
-                        desc=f"{spec.name}: samples") if order else []
+    records = (
+        run_tasks(
+            len(order),
+            work,
+            comm,
+            static=spec.uq_schedule == "static",
+            desc=f"{spec.name}: samples",
+        )
+        if order
+        else []
+    )
     timings["samples (wall)"] = time.perf_counter() - t0
     sched = schedule_efficiency(records, size)
     sched["schedule"] = spec.uq_schedule
     sched["n_computed"] = len(records)
 
-    summary: dict[str, Any] = {"study": spec.name, "kind": "uncertainty", "out": str(out),
-                               "report": str(out / "report.html"), "ranks": size,
-                               "n_samples": len(samples), "n_computed": len(order),
-                               "n_reused": len(samples) - len(order), "schedule": sched}
+    summary: dict[str, Any] = {
+        "study": spec.name,
+        "kind": "uncertainty",
+        "out": str(out),
+        "report": str(out / "report.html"),
+        "ranks": size,
+        "n_samples": len(samples),
+        "n_computed": len(order),
+        "n_reused": len(samples) - len(order),
+        "schedule": sched,
+    }
     t0 = time.perf_counter()
     results = collect(samples, design, case_dir, comm)  # collective: a share per rank
     if rank == 0:
@@ -207,13 +236,17 @@ def sample_output(case_dir: Path, s: Sample) -> dict[str, Any]:
     res = CaseResult.load(case_dir / f"{s.case.digest}.h5")
     summ = res.summary()
     out = {q: (np.nan if summ.get(q) is None else float(summ[q])) for q, _, _ in QUANTITIES}
-    out.update(hbm_s=float(res.timings.get("hbm", np.nan)),
-               cpu_s=float(res.timings.get("hbm_cpu", np.nan)), failed=bool(res.branch.failed))
+    out.update(
+        hbm_s=float(res.timings.get("hbm", np.nan)),
+        cpu_s=float(res.timings.get("hbm_cpu", np.nan)),
+        failed=bool(res.branch.failed),
+    )
     return out
 
 
-def collect(samples: list[Sample], design: Design, case_dir: Path,
-            comm=None) -> dict[tuple, dict] | None:
+def collect(
+    samples: list[Sample], design: Design, case_dir: Path, comm=None
+) -> dict[tuple, dict] | None:
     """(damper, phase) -> the design-ordered outputs of its samples (NaN where no peak).
 
     Under MPI each rank reads a share of the case files (rank r: samples r,
@@ -231,8 +264,10 @@ def collect(samples: list[Sample], design: Design, case_dir: Path,
     outputs = dict(mine)
     groups: dict[tuple, dict] = {}
     for k, s in enumerate(samples):
-        g = groups.setdefault((s.case.damper, s.case.phase_deg), {
-            q: np.full(design.n_rows, np.nan) for q, _, _ in QUANTITIES})
+        g = groups.setdefault(
+            (s.case.damper, s.case.phase_deg),
+            {q: np.full(design.n_rows, np.nan) for q, _, _ in QUANTITIES},
+        )
         g.setdefault("hbm_s", np.full(design.n_rows, np.nan))
         g.setdefault("cpu_s", np.full(design.n_rows, np.nan))
         g.setdefault("failed", np.zeros(design.n_rows, bool))
@@ -244,8 +279,9 @@ def collect(samples: list[Sample], design: Design, case_dir: Path,
     return groups
 
 
-def analyse(spec: StudySpec, design: Design, dists: dict[str, Distribution],
-            results: dict[tuple, dict]) -> dict[str, Any]:
+def analyse(
+    spec: StudySpec, design: Design, dists: dict[str, Distribution], results: dict[tuple, dict]
+) -> dict[str, Any]:
     """Statistics of each quantity and Sobol indices per damper and family.
 
     A sample whose solve stopped early (``failed``) has no trustworthy peak
@@ -280,8 +316,14 @@ def analyse(spec: StudySpec, design: Design, dists: dict[str, Distribution],
         fam = family_name(phase)
         thr = thresholds[fam]
         c = clean[(damper, phase)]
-        row: dict[str, Any] = {"damper": damper, "phase_deg": phase, "family": fam,
-                               "threshold_mm": thr, "stats": {}, "indices": {}}
+        row: dict[str, Any] = {
+            "damper": damper,
+            "phase_deg": phase,
+            "family": fam,
+            "threshold_mm": thr,
+            "stats": {},
+            "indices": {},
+        }
         for q, _, _ in QUANTITIES:
             row["stats"][q] = statistics(c[q][ab], thr if q == "peak_amplitude_mm" else None)
             row["indices"][q] = sobol_indices(design, c[q], seed=spec.uq_seed)
@@ -296,17 +338,29 @@ def analyse(spec: StudySpec, design: Design, dists: dict[str, Distribution],
         groups.append(row)
     robust = {}
     for phase in fams:
-        cand = [r for r in groups if r["phase_deg"] == phase
-                and "p95_common" in r["stats"]["peak_amplitude_mm"]]
+        cand = [
+            r
+            for r in groups
+            if r["phase_deg"] == phase and "p95_common" in r["stats"]["peak_amplitude_mm"]
+        ]
         if cand:
             best = min(cand, key=lambda r: r["stats"]["peak_amplitude_mm"]["p95_common"])
             robust[family_name(phase)] = best["damper"]
-    return {"thresholds_mm": thresholds, "groups": groups, "robust": robust,
-            "inputs": {k: d.describe() for k, d in dists.items()}}
+    return {
+        "thresholds_mm": thresholds,
+        "groups": groups,
+        "robust": robust,
+        "inputs": {k: d.describe() for k, d in dists.items()},
+    }
 
 
-def write_h5(path: Path, design: Design, dists: dict[str, Distribution],
-             results: dict[tuple, dict], a: dict[str, Any]) -> Path:
+def write_h5(
+    path: Path,
+    design: Design,
+    dists: dict[str, Distribution],
+    results: dict[tuple, dict],
+    a: dict[str, Any],
+) -> Path:
     """``uncertainty.h5``: the design, every sample's outputs, the statistics and indices."""
     import json
 
@@ -346,10 +400,16 @@ def write_h5(path: Path, design: Design, dists: dict[str, Distribution],
     return path
 
 
-def write_uncertainty_outputs(spec: StudySpec, out: Path, design: Design,
-                              dists: dict[str, Distribution], results: dict[tuple, dict],
-                              a: dict[str, Any], sched: dict[str, Any],
-                              timings: dict[str, float]) -> None:
+def write_uncertainty_outputs(
+    spec: StudySpec,
+    out: Path,
+    design: Design,
+    dists: dict[str, Distribution],
+    results: dict[tuple, dict],
+    a: dict[str, Any],
+    sched: dict[str, Any],
+    timings: dict[str, float],
+) -> None:
     """Tables, HDF5, figures, ``uncertainty.json``, manifest and report."""
     from ..post.tables import write_rows_csv
     from .outputs import write_manifest_and_report
@@ -358,21 +418,31 @@ def write_uncertainty_outputs(spec: StudySpec, out: Path, design: Design,
     write_rows_csv(tables / "uncertainty_answer.csv", answer_rows(a))
     write_rows_csv(tables / "uncertainty_stats.csv", stats_rows(a))
     write_rows_csv(tables / "uncertainty_indices.csv", index_rows(a))
-    write_rows_csv(tables / "uncertainty_inputs.csv",
-                   [{"input": k, "meaning": INPUT_LABELS[k], "distribution": d.describe()}
-                    for k, d in dists.items()])
+    write_rows_csv(
+        tables / "uncertainty_inputs.csv",
+        [
+            {"input": k, "meaning": INPUT_LABELS[k], "distribution": d.describe()}
+            for k, d in dists.items()
+        ],
+    )
     samp = []
     for (damper, phase), g in results.items():
         for r in range(design.n_rows):
-            samp.append({"damper": damper, "family": family_name(phase), "row": r,
-                         "role": design.role(r),
-                         **{k: float(design.values[r, j]) for j, k in enumerate(design.names)},
-                         **{q: g[q][r] for q, _, _ in QUANTITIES},
-                         "hbm_s": g["hbm_s"][r], "failed": bool(g["failed"][r])})
+            samp.append(
+                {
+                    "damper": damper,
+                    "family": family_name(phase),
+                    "row": r,
+                    "role": design.role(r),
+                    **{k: float(design.values[r, j]) for j, k in enumerate(design.names)},
+                    **{q: g[q][r] for q, _, _ in QUANTITIES},
+                    "hbm_s": g["hbm_s"][r],
+                    "failed": bool(g["failed"][r]),
+                }
+            )
     write_rows_csv(tables / "uncertainty_samples.csv", samp)
     write_h5(out / "uncertainty.h5", design, dists, results, a)
-    write_json(out / "uncertainty.json", {"analysis": a, "schedule": sched,
-                                          "timings": timings})
+    write_json(out / "uncertainty.json", {"analysis": a, "schedule": sched, "timings": timings})
     figures: list[dict[str, str]] = []
     try:
         from ..render.uncertainty_figures import uncertainty_figures
@@ -387,11 +457,36 @@ def write_uncertainty_outputs(spec: StudySpec, out: Path, design: Design,
 
 
 # moved to post/uncertainty.py and studies/uq_schedule.py; kept importable from here
-__all__ = ["DIST_KINDS", "INPUTS", "INPUT_LABELS", "QUANTITIES", "Design", "Distribution",
-           "WorkCounter", "analyse", "analysis_summary", "answer_rows", "driver", "headline",
-           "index_rows", "make_design", "parse_distribution", "run_tasks", "run_uncertainty",
-           "schedule_efficiency", "simulate_schedule", "sobol_indices", "statistics",
-           "stats_rows", "study_distributions", "write_h5",
-           # the samples: studies/uq_samples.py
-           "Sample", "base_settings", "nominal_contact", "plan_samples", "prepare_sample",
-           "sample_settings"]
+__all__ = [
+    "DIST_KINDS",
+    "INPUTS",
+    "INPUT_LABELS",
+    "QUANTITIES",
+    "Design",
+    "Distribution",
+    "WorkCounter",
+    "analyse",
+    "analysis_summary",
+    "answer_rows",
+    "driver",
+    "headline",
+    "index_rows",
+    "make_design",
+    "parse_distribution",
+    "run_tasks",
+    "run_uncertainty",
+    "schedule_efficiency",
+    "simulate_schedule",
+    "sobol_indices",
+    "statistics",
+    "stats_rows",
+    "study_distributions",
+    "write_h5",
+    # the samples: studies/uq_samples.py
+    "Sample",
+    "base_settings",
+    "nominal_contact",
+    "plan_samples",
+    "prepare_sample",
+    "sample_settings",
+]

@@ -26,8 +26,14 @@ from ..post.uncertainty import Design, Distribution, parse_distribution
 from .plan import Case, make_case
 from .spec import StudySpec
 
-_VALID = {"mu": (0.0, 2.0), "cf": (0.0, None), "kt": (0.0, None), "kn": (0.0, None),
-          "damping": (0.0, 0.5), "seat-tilt": (-5.0, 5.0)}
+_VALID = {
+    "mu": (0.0, 2.0),
+    "cf": (0.0, None),
+    "kt": (0.0, None),
+    "kn": (0.0, None),
+    "damping": (0.0, 0.5),
+    "seat-tilt": (-5.0, 5.0),
+}
 
 
 def study_distributions(spec: StudySpec) -> dict[str, Distribution]:
@@ -38,11 +44,17 @@ def study_distributions(spec: StudySpec) -> dict[str, Distribution]:
         d = parse_distribution(opt, getattr(spec, opt.replace("-", "_")))
         lo, hi = d.support
         vlo, vhi = _VALID[name]
-        if lo < vlo or (vlo == 0.0 and name in ("cf", "kt", "kn") and lo <= 0.0) or \
-                (vhi is not None and hi > vhi):
-            raise InputError(opt, getattr(spec, opt.replace("-", "_")),
-                             f"a distribution within [{vlo:g}, {vhi if vhi is not None else 'inf'}]"
-                             " (give bounds)")
+        if (
+            lo < vlo
+            or (vlo == 0.0 and name in ("cf", "kt", "kn") and lo <= 0.0)
+            or (vhi is not None and hi > vhi)
+        ):
+            raise InputError(
+                opt,
+                getattr(spec, opt.replace("-", "_")),
+                f"a distribution within [{vlo:g}, {vhi if vhi is not None else 'inf'}]"
+                " (give bounds)",
+            )
         out[name] = d
     if not out:
         raise InputError("uq-inputs", spec.uq_inputs, "at least one uncertain input")
@@ -70,9 +82,14 @@ def nominal_contact(spec: StudySpec):
     """The nominal contact parameters: the study's options, else geometry/contact.toml."""
     from ..assembly.params import load_contact_params
 
-    return load_contact_params(mu=spec.mu, cf_n=spec.cf, kt_line_n_per_m2=spec.kt_line,
-                               kn_line_n_per_m2=spec.kn_line, kt_face_n_per_m3=spec.kt_face,
-                               kn_face_n_per_m3=spec.kn_face)
+    return load_contact_params(
+        mu=spec.mu,
+        cf_n=spec.cf,
+        kt_line_n_per_m2=spec.kt_line,
+        kn_line_n_per_m2=spec.kn_line,
+        kt_face_n_per_m3=spec.kt_face,
+        kn_face_n_per_m3=spec.kn_face,
+    )
 
 
 def sample_settings(base: dict[str, Any], nominal, x: dict[str, float]) -> dict[str, Any]:
@@ -89,19 +106,36 @@ def sample_settings(base: dict[str, Any], nominal, x: dict[str, float]) -> dict[
     return s
 
 
-def sample_case(damper: str, phase: float, force: float, settings: dict[str, Any],
-                tilt_deg: float, variant: str) -> Case:
+def sample_case(
+    damper: str, phase: float, force: float, settings: dict[str, Any], tilt_deg: float, variant: str
+) -> Case:
     """A runner case whose digest also covers the seat tilt and the imperfection model."""
     c = make_case(damper, phase, force, settings, variant)
-    d = c.digest if tilt_deg == 0.0 else digest(
-        {"case": c.digest, "seat_tilt_deg": float(tilt_deg), "model": imperfection_code()})
+    d = (
+        c.digest
+        if tilt_deg == 0.0
+        else digest(
+            {"case": c.digest, "seat_tilt_deg": float(tilt_deg), "model": imperfection_code()}
+        )
+    )
     return dataclasses.replace(c, digest=d)
 
 
 # only the study-wide settings that shape a sample's answer enter its case: the
 # uncertainty options themselves do not (a sample's values are in its settings)
-_UQ_OPTIONS = ("uq-inputs", "uq-mu", "uq-cf", "uq-kt", "uq-kn", "uq-damping", "uq-seat-tilt",
-               "uq-samples", "uq-seed", "uq-threshold", "uq-schedule")
+_UQ_OPTIONS = (
+    "uq-inputs",
+    "uq-mu",
+    "uq-cf",
+    "uq-kt",
+    "uq-kn",
+    "uq-damping",
+    "uq-seat-tilt",
+    "uq-samples",
+    "uq-seed",
+    "uq-threshold",
+    "uq-schedule",
+)
 
 
 def base_settings(spec: StudySpec) -> dict[str, Any]:
@@ -114,8 +148,9 @@ def base_settings(spec: StudySpec) -> dict[str, Any]:
 def plan_samples(spec: StudySpec, design: Design) -> list[Sample]:
     """Every sample of the study: damper x family x design row, in a stable order."""
     if len(spec.forces) != 1:
-        raise InputError("forces", spec.forces, "exactly one excitation level, N, for an "
-                         "uncertainty study")
+        raise InputError(
+            "forces", spec.forces, "exactly one excitation level, N, for an uncertainty study"
+        )
     nominal = nominal_contact(spec)
     base = base_settings(spec)
     force = float(spec.forces[0])
@@ -154,12 +189,20 @@ def prepare_sample(base_prep, case: Case, tilt_deg: float):
     n0 = preloads(contact, cp.cf_n, cp.mu, beta)
     n0 = tilted_preloads(contact.points, contact.side, kn, n0, tilt_deg)
     model = dataclasses.replace(
-        base, mu=np.full(contact.n_pairs, cp.mu), kt=kt, kn=kn, n0=n0,
-        info={**base.info, "total_preload_n": float(n0.sum()),
-              "open_share_at_rest": open_share(n0, contact.side)})
-    contacts = ContactElements(W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt, kn=model.kn,
-                               n0=model.n0)
+        base,
+        mu=np.full(contact.n_pairs, cp.mu),
+        kt=kt,
+        kn=kn,
+        n0=n0,
+        info={
+            **base.info,
+            "total_preload_n": float(n0.sum()),
+            "open_share_at_rest": open_share(n0, contact.side),
+        },
+    )
+    contacts = ContactElements(
+        W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt, kn=model.kn, n0=model.n0
+    )
     system = System(M=model.M, K=model.K, zeta=case.settings["damping"], contacts=contacts)
     timings = {"assembly (sample)": time.perf_counter() - t0}
-    return PreparedModel(base_prep.geometry, base_prep.geometry_dir, model, system, {},
-                         timings, cp)
+    return PreparedModel(base_prep.geometry, base_prep.geometry_dir, model, system, {}, timings, cp)

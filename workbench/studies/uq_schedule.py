@@ -37,8 +37,7 @@ class WorkCounter:
             from mpi4py import MPI
 
             itemsize = MPI.LONG.Get_size()
-            self.win = MPI.Win.Allocate(itemsize if self.rank == 0 else 0, itemsize,
-                                        comm=comm)
+            self.win = MPI.Win.Allocate(itemsize if self.rank == 0 else 0, itemsize, comm=comm)
             if self.rank == 0:
                 buf = np.frombuffer(self.win.tomemory(), dtype=np.int64)
                 buf[0] = 0
@@ -68,8 +67,9 @@ class WorkCounter:
             self.win = None
 
 
-def run_tasks(n_tasks: int, work, comm=None, *, static: bool = False,
-              desc: str = "samples") -> list[dict[str, Any]]:
+def run_tasks(
+    n_tasks: int, work, comm=None, *, static: bool = False, desc: str = "samples"
+) -> list[dict[str, Any]]:
     """Run ``work(k)`` for k in 0..n_tasks-1 spread over the ranks; the records of every rank.
 
     Each record: task ``k``, ``rank``, ``start`` and ``end`` (s since the
@@ -81,16 +81,22 @@ def run_tasks(n_tasks: int, work, comm=None, *, static: bool = False,
         comm.Barrier()
     t0 = time.perf_counter()
     mine: list[dict[str, Any]] = []
-    with progress_bar(desc, total=n_tasks if counter.size == 1 else None,
-                      unit="case") as bar:
+    with progress_bar(desc, total=n_tasks if counter.size == 1 else None, unit="case") as bar:
         while True:
             k = counter.next()
             if k >= n_tasks:
                 break
             ts = time.perf_counter() - t0
             extra = work(k) or {}
-            mine.append({"k": k, "rank": counter.rank, "start": ts,
-                         "end": time.perf_counter() - t0, **extra})
+            mine.append(
+                {
+                    "k": k,
+                    "rank": counter.rank,
+                    "start": ts,
+                    "end": time.perf_counter() - t0,
+                    **extra,
+                }
+            )
             bar.update(1)
     if comm is not None:
         comm.Barrier()
@@ -106,10 +112,16 @@ def schedule_efficiency(records: list[dict[str, Any]], size: int) -> dict[str, f
         return {"busy_s": 0.0, "wall_s": 0.0, "efficiency": float("nan"), "ranks": size}
     busy = float(sum(r["end"] - r["start"] for r in records))
     wall = float(max(r["end"] for r in records))
-    per_rank = [float(sum(r["end"] - r["start"] for r in records if r["rank"] == q))
-                for q in range(size)]
-    return {"busy_s": busy, "wall_s": wall, "efficiency": busy / (size * wall) if wall else 1.0,
-            "ranks": size, "busy_per_rank_s": per_rank}
+    per_rank = [
+        float(sum(r["end"] - r["start"] for r in records if r["rank"] == q)) for q in range(size)
+    ]
+    return {
+        "busy_s": busy,
+        "wall_s": wall,
+        "efficiency": busy / (size * wall) if wall else 1.0,
+        "ranks": size,
+        "busy_per_rank_s": per_rank,
+    }
 
 
 def simulate_schedule(costs: list[float], ranks: int, *, static: bool) -> float:

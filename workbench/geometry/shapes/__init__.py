@@ -67,8 +67,10 @@ def _discover() -> dict[str, DamperShape]:
         shape = getattr(mod, "SHAPE", None)
         if isinstance(shape, DamperShape):
             if shape.name != info.name:
-                raise RuntimeError(f"{mod.__name__}: SHAPE.name is '{shape.name}', expected "
-                                   f"'{info.name}' (the module's name)")
+                raise RuntimeError(
+                    f"{mod.__name__}: SHAPE.name is '{shape.name}', expected "
+                    f"'{info.name}' (the module's name)"
+                )
             found.append(shape)
     found.sort(key=lambda s: (s.order, s.name))
     return {s.name: s for s in found}

@@ -25,11 +25,16 @@ class ConeParams:
     """Conical damper: a frustum whose axis tilts by gamma in the y-z plane."""
 
     semi_angle_deg: float = param(
-        10.0, "cone semi-angle alpha_c (must be below the platform angle), deg",
-        lo=0.0, hi=75.0, lo_open=True)
+        10.0,
+        "cone semi-angle alpha_c (must be below the platform angle), deg",
+        lo=0.0,
+        hi=75.0,
+        lo_open=True,
+    )
     r1_mm: float = param(10.0, "radius of the small end R1, mm", lo=0.0, lo_open=True)
     length_mm: float = param(
-        40.0, "length L along the cone axis (R2 = R1 + L tan alpha_c), mm", lo=0.0, lo_open=True)
+        40.0, "length L along the cone axis (R2 = R1 + L tan alpha_c), mm", lo=0.0, lo_open=True
+    )
     n_contact_points: int = param(23, "contact points per contact line", lo=2, hi=400)
 
 
@@ -37,10 +42,13 @@ def _cone_large(name: str, pl: dict, l_hi: float, r2_hi: float) -> tuple[str, fl
     """The parameter to blame when the cone's large end does not fit: its length, or, when
     even the small radius is too large for any length, ``cone.r1_mm``."""
     if l_hi <= 0.0:
-        return ("cone.r1_mm", pl["r1"], f"cone.r1_mm < {r2_hi:.4g} mm (the large radius "
-                f"R2 = R1 + L tan(alpha_c) must stay <= {r2_hi:.4g} mm)")
-    return (name, pl["length"],
-            f"{name} <= {l_hi:.4g} mm (large radius R2 <= {r2_hi:.4g} mm)")
+        return (
+            "cone.r1_mm",
+            pl["r1"],
+            f"cone.r1_mm < {r2_hi:.4g} mm (the large radius "
+            f"R2 = R1 + L tan(alpha_c) must stay <= {r2_hi:.4g} mm)",
+        )
+    return (name, pl["length"], f"{name} <= {l_hi:.4g} mm (large radius R2 <= {r2_hi:.4g} mm)")
 
 
 def seat(p: ConeParams, g: dict, rig: Any) -> dict:
@@ -51,11 +59,13 @@ def seat(p: ConeParams, g: dict, rig: Any) -> dict:
     ac = math.radians(p.semi_angle_deg)
     if ac >= beta:
         raise InputError(
-            "cone.semi_angle_deg", p.semi_angle_deg,
+            "cone.semi_angle_deg",
+            p.semi_angle_deg,
             f"0 < cone.semi_angle_deg < rig.platform.angle_deg = {rig.platform.angle_deg:g} deg",
             "a cone touches both platform planes along generators only if its axis tilts by "
             "gamma with sin(gamma) = sin(alpha_c) / sin(beta); for alpha_c >= beta that has no "
-            "solution (at alpha_c = beta the cone would stand vertical)")
+            "solution (at alpha_c = beta the cone would stand vertical)",
+        )
     sb, sa, ca = math.sin(beta), math.sin(ac), math.cos(ac)
     gamma = math.asin(sa / sb)
     cg, sg = math.cos(gamma), math.sin(gamma)
@@ -82,11 +92,30 @@ def seat(p: ConeParams, g: dict, rig: Any) -> dict:
     centroid = c1 + zbar * a  # measured from the small end toward the large end
     z_min = min(c1[2] - R1 * cg, c2[2] - R2 * cg)
     return dict(
-        placement=dict(kind="cone", apex=apex, axis=a, r1=R1, r2=R2, c1=c1, c2=c2,
-                       gamma=gamma, semi_angle=ac, length=L),
-        points=np.vstack(pts), t1=np.vstack(t1s), n=np.vstack(ns), side=np.concatenate(side),
-        weight=np.full(2 * n, ell / n), kind="line", extent=ell, line_ends=np.array(ends),
-        volume=vol, centroid=centroid, x_extent=R2, z_min=z_min,
+        placement=dict(
+            kind="cone",
+            apex=apex,
+            axis=a,
+            r1=R1,
+            r2=R2,
+            c1=c1,
+            c2=c2,
+            gamma=gamma,
+            semi_angle=ac,
+            length=L,
+        ),
+        points=np.vstack(pts),
+        t1=np.vstack(t1s),
+        n=np.vstack(ns),
+        side=np.concatenate(side),
+        weight=np.full(2 * n, ell / n),
+        kind="line",
+        extent=ell,
+        line_ends=np.array(ends),
+        volume=vol,
+        centroid=centroid,
+        x_extent=R2,
+        z_min=z_min,
         notes=dict(gamma_deg=math.degrees(gamma), r2_mm=R2, contact_line_length_mm=ell),
     )
 
@@ -102,8 +131,11 @@ def fit_blame(gp: Any, g: dict, pl: dict, lo_ok: float, hi_ok: float, half_w: fl
     small = ("cone.r1_mm", pl["r1"], f"cone.r1_mm >= {r1_lo:.4g} mm")
     large = _cone_large("cone.length_mm", pl, l_hi, r2_hi)
     cg = math.cos(pl["gamma"])
-    long_ = ("cone.length_mm", pl["length"],
-             f"cone.length_mm <= {2 * half_w * ca * ca / cg:.4g} mm")
+    long_ = (
+        "cone.length_mm",
+        pl["length"],
+        f"cone.length_mm <= {2 * half_w * ca * ca / cg:.4g} mm",
+    )
     return small, large, long_
 
 
@@ -127,9 +159,18 @@ def draw(gmsh: Any, lay: Any, members: dict, point_tags: list) -> int:
 
 
 SHAPE = DamperShape(
-    name="cone", params=ConeParams, contact="line", seat=seat, fit_blame=fit_blame,
-    hit_blame=hit_blame, draw=draw, style=("#1f6fb4", "-", "o"),
-    study_options={"points-per-line": ("n_contact_points", int),
-                   "cone-angle": ("semi_angle_deg", float)}, order=1,
-    description="a frustum whose axis tilts in the y-z plane, one contact line on each "
-                "platform")
+    name="cone",
+    params=ConeParams,
+    contact="line",
+    seat=seat,
+    fit_blame=fit_blame,
+    hit_blame=hit_blame,
+    draw=draw,
+    style=("#1f6fb4", "-", "o"),
+    study_options={
+        "points-per-line": ("n_contact_points", int),
+        "cone-angle": ("semi_angle_deg", float),
+    },
+    order=1,
+    description="a frustum whose axis tilts in the y-z plane, one contact line on each platform",
+)

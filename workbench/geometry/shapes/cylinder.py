@@ -47,15 +47,27 @@ def seat(p: CylinderParams, g: dict, rig: Any = None) -> dict:
         t1s.append(np.tile([0.0, 1.0, 0.0], (n, 1)))
         ns.append(np.tile(g["normals"][k], (n, 1)))
         side.append(np.full(n, k))
-    ends = [(c - R * g["normals"][k]) + s * np.array([0.0, L / 2, 0.0])
-            for k in range(2) for s in (-1.0, 1.0)]
+    ends = [
+        (c - R * g["normals"][k]) + s * np.array([0.0, L / 2, 0.0])
+        for k in range(2)
+        for s in (-1.0, 1.0)
+    ]
     return dict(
-        placement=dict(kind="cylinder", center=c, axis=np.array([0.0, 1.0, 0.0]), radius=R,
-                       length=L, y0=-L / 2),
-        points=np.vstack(pts), t1=np.vstack(t1s), n=np.vstack(ns), side=np.concatenate(side),
-        weight=np.full(2 * n, L / n), kind="line", extent=L, line_ends=np.array(ends),
-        volume=math.pi * R * R * L, centroid=c.copy(),
-        x_extent=R, z_min=zc - R,
+        placement=dict(
+            kind="cylinder", center=c, axis=np.array([0.0, 1.0, 0.0]), radius=R, length=L, y0=-L / 2
+        ),
+        points=np.vstack(pts),
+        t1=np.vstack(t1s),
+        n=np.vstack(ns),
+        side=np.concatenate(side),
+        weight=np.full(2 * n, L / n),
+        kind="line",
+        extent=L,
+        line_ends=np.array(ends),
+        volume=math.pi * R * R * L,
+        centroid=c.copy(),
+        x_extent=R,
+        z_min=zc - R,
         notes=dict(contact_line_length_mm=L),
     )
 
@@ -65,8 +77,10 @@ def fit_blame(gp: Any, g: dict, pl: dict, lo_ok: float, hi_ok: float, half_w: fl
     sb, cb = math.sin(g["beta"]), math.cos(g["beta"])
     r_lo, r_hi = lo_ok * sb / cb, hi_ok * sb / cb
     rng = f"{r_lo:.4g} <= cylinder.radius_mm <= {r_hi:.4g} mm"
-    small, large = ("cylinder.radius_mm", pl["radius"], rng), ("cylinder.radius_mm",
-                                                              pl["radius"], rng)
+    small, large = (
+        ("cylinder.radius_mm", pl["radius"], rng),
+        ("cylinder.radius_mm", pl["radius"], rng),
+    )
     long_ = ("cylinder.length_mm", pl["length"], f"cylinder.length_mm <= {2 * half_w:.4g} mm")
     return small, large, long_
 
@@ -90,7 +104,15 @@ def draw(gmsh: Any, lay: Any, members: dict, point_tags: list) -> int:
 
 
 SHAPE = DamperShape(
-    name="cylinder", params=CylinderParams, contact="line", seat=seat, fit_blame=fit_blame,
-    hit_blame=hit_blame, draw=draw, style=("#ff7f0e", "--", "s"),
-    study_options={"points-per-line": ("n_contact_points", int)}, order=2,
-    description="a cylinder along y, one contact line on each platform")
+    name="cylinder",
+    params=CylinderParams,
+    contact="line",
+    seat=seat,
+    fit_blame=fit_blame,
+    hit_blame=hit_blame,
+    draw=draw,
+    style=("#ff7f0e", "--", "s"),
+    study_options={"points-per-line": ("n_contact_points", int)},
+    order=2,
+    description="a cylinder along y, one contact line on each platform",
+)

@@ -26,16 +26,24 @@ class WedgeParams:
 
     length_mm: float = param(40.0, "length along y, mm", lo=0.0, lo_open=True)
     top_width_mm: float = param(
-        12.0, "width (along x) of the flat top between the two contact faces, mm",
-        lo=0.0, lo_open=True)
+        12.0,
+        "width (along x) of the flat top between the two contact faces, mm",
+        lo=0.0,
+        lo_open=True,
+    )
     face_width_mm: float = param(
-        10.0, "width of each contact face measured down its slope, mm", lo=0.0, lo_open=True)
+        10.0, "width of each contact face measured down its slope, mm", lo=0.0, lo_open=True
+    )
     skirt_height_mm: float = param(
-        4.0, "height of the vertical sides below the contact faces, mm", lo=0.0)
+        4.0, "height of the vertical sides below the contact faces, mm", lo=0.0
+    )
     n_contact_rows: int = param(5, "rows of contact points up each face's slope", lo=2, hi=100)
     n_contact_per_row: int = param(
-        15, "contact points in a full row along y (rows alternate n and n - 1: staggered)",
-        lo=2, hi=200)
+        15,
+        "contact points in a full row along y (rows alternate n and n - 1: staggered)",
+        lo=2,
+        hi=200,
+    )
 
 
 def seat(p: WedgeParams, g: dict, rig: Any = None) -> dict:
@@ -53,19 +61,33 @@ def seat(p: WedgeParams, g: dict, rig: Any = None) -> dict:
     skirt = p.skirt_height_mm if p.skirt_height_mm >= SAME_MM else 0.0
     z_bot = lo1[2] - skirt
     # section polygon in the x-z plane, counter-clockwise seen from +y... order is irrelevant
-    poly = np.array([
-        [up1[0], up1[2]], [lo1[0], lo1[2]], [lo1[0], z_bot],
-        [-lo1[0], z_bot], [-lo1[0], lo1[2]], [-up1[0], up1[2]],
-    ])
+    poly = np.array(
+        [
+            [up1[0], up1[2]],
+            [lo1[0], lo1[2]],
+            [lo1[0], z_bot],
+            [-lo1[0], z_bot],
+            [-lo1[0], lo1[2]],
+            [-up1[0], up1[2]],
+        ]
+    )
     if skirt == 0.0:
         poly = np.delete(poly, [2, 3], axis=0)
     f = g["min_feature"]
-    check_step("wedge.skirt_height_mm", p.skirt_height_mm, p.skirt_height_mm, f,
-          "the height of the wedge's vertical sides")
+    check_step(
+        "wedge.skirt_height_mm",
+        p.skirt_height_mm,
+        p.skirt_height_mm,
+        f,
+        "the height of the wedge's vertical sides",
+    )
     if p.face_width_mm < f:
-        raise fit_error("wedge.face_width_mm", p.face_width_mm,
-                         f"wedge.face_width_mm >= rig.fit.min_feature_mm = {f:g} mm",
-                         "the contact faces would be slivers")
+        raise fit_error(
+            "wedge.face_width_mm",
+            p.face_width_mm,
+            f"wedge.face_width_mm >= rig.fit.min_feature_mm = {f:g} mm",
+            "the contact faces would be slivers",
+        )
     h = p.face_width_mm / ns_rows
     rows_s = s_b - (np.arange(ns_rows) + 0.5) * h  # row 0 lowest, up the slope
     full_y = -L / 2 + (np.arange(ny) + 0.5) * L / ny
@@ -94,13 +116,22 @@ def seat(p: WedgeParams, g: dict, rig: Any = None) -> dict:
                 ends.append(ridge + s_ * g["down"][k] + np.array([0.0, yy, 0.0]))
     return dict(
         placement=dict(kind="wedge", section_xz=poly, y0=-L / 2, length=L, s_a=s_a, s_b=s_b),
-        points=np.vstack(pts), t1=np.vstack(t1s), n=np.vstack(ns), side=np.concatenate(side),
-        weight=np.concatenate(weight), kind="face", extent=p.face_width_mm * L,
+        points=np.vstack(pts),
+        t1=np.vstack(t1s),
+        n=np.vstack(ns),
+        side=np.concatenate(side),
+        weight=np.concatenate(weight),
+        kind="face",
+        extent=p.face_width_mm * L,
         line_ends=np.array(ends),
-        volume=abs(area) * L, centroid=np.array([cx, 0.0, cz]),
-        x_extent=float(np.abs(poly[:, 0]).max()), z_min=float(poly[:, 1].min()),
-        notes=dict(contact_face_area_mm2=p.face_width_mm * L,
-                   points_per_face=int(sum(ny if j % 2 == 0 else ny - 1 for j in range(ns_rows)))),
+        volume=abs(area) * L,
+        centroid=np.array([cx, 0.0, cz]),
+        x_extent=float(np.abs(poly[:, 0]).max()),
+        z_min=float(poly[:, 1].min()),
+        notes=dict(
+            contact_face_area_mm2=p.face_width_mm * L,
+            points_per_face=int(sum(ny if j % 2 == 0 else ny - 1 for j in range(ns_rows))),
+        ),
     )
 
 
@@ -108,10 +139,16 @@ def fit_blame(gp: Any, g: dict, pl: dict, lo_ok: float, hi_ok: float, half_w: fl
     """The top width when the faces start above the platform tip, the face width when they
     reach below its root, the length when they run off its width."""
     sb = math.sin(g["beta"])
-    small = ("wedge.top_width_mm", gp.shape.top_width_mm,
-             f"wedge.top_width_mm >= {2 * lo_ok * sb:.4g} mm")
-    large = ("wedge.face_width_mm", gp.shape.face_width_mm,
-             f"wedge.face_width_mm <= {hi_ok - pl['s_a']:.4g} mm")
+    small = (
+        "wedge.top_width_mm",
+        gp.shape.top_width_mm,
+        f"wedge.top_width_mm >= {2 * lo_ok * sb:.4g} mm",
+    )
+    large = (
+        "wedge.face_width_mm",
+        gp.shape.face_width_mm,
+        f"wedge.face_width_mm <= {hi_ok - pl['s_a']:.4g} mm",
+    )
     long_ = ("wedge.length_mm", pl["length"], f"wedge.length_mm <= {2 * half_w:.4g} mm")
     return small, large, long_
 
@@ -119,8 +156,11 @@ def fit_blame(gp: Any, g: dict, pl: dict, lo_ok: float, hi_ok: float, half_w: fl
 def hit_blame(gp: Any, g: dict, pl: dict, x_max: float):
     """The face width, when the wedge would touch the blades."""
     sb = math.sin(g["beta"])
-    return ("wedge.face_width_mm", gp.shape.face_width_mm,
-            f"wedge.face_width_mm <= {max(x_max / sb - pl['s_a'], 0.0):.4g} mm")
+    return (
+        "wedge.face_width_mm",
+        gp.shape.face_width_mm,
+        f"wedge.face_width_mm <= {max(x_max / sb - pl['s_a'], 0.0):.4g} mm",
+    )
 
 
 def draw(gmsh: Any, lay: Any, members: dict, point_tags: list) -> int:
@@ -131,8 +171,7 @@ def draw(gmsh: Any, lay: Any, members: dict, point_tags: list) -> int:
     pl = lay.damper
     sec = pl["section_xz"]
     corners = [occ.addPoint(float(x), pl["y0"], float(z)) for x, z in sec]
-    lines = [occ.addLine(corners[i], corners[(i + 1) % len(corners)])
-             for i in range(len(corners))]
+    lines = [occ.addLine(corners[i], corners[(i + 1) % len(corners)]) for i in range(len(corners))]
     face = occ.addPlaneSurface([occ.addCurveLoop(lines)])
     ext = occ.extrude([(2, face)], 0.0, pl["length"], 0.0)
     occ.synchronize()
@@ -148,6 +187,14 @@ def draw(gmsh: Any, lay: Any, members: dict, point_tags: list) -> int:
 
 
 SHAPE = DamperShape(
-    name="wedge", params=WedgeParams, contact="face", seat=seat, fit_blame=fit_blame,
-    hit_blame=hit_blame, draw=draw, style=("#b8860b", ":", "^"), order=3,
-    description="a prism along y, contact over one face on each platform")
+    name="wedge",
+    params=WedgeParams,
+    contact="face",
+    seat=seat,
+    fit_blame=fit_blame,
+    hit_blame=hit_blame,
+    draw=draw,
+    style=("#b8860b", ":", "^"),
+    order=3,
+    description="a prism along y, contact over one face on each platform",
+)
