@@ -43,9 +43,9 @@ def one(results, damper, phase, force):
 
 
 # Peaks are compared by their harmonic-1 amplitude (the vibration), as the paper's
-# harmonics 1-3 have no mean term: a stuck damper's mean position is set by its history,
-# and that offset (0.15 mm on the cylinder out of phase at 9.6 N, measured) is part of
-# max|x(t)| but not of the vibration.
+# harmonics 1-3 have no mean term: out of phase the damper climbs into its groove while
+# it slips (a ratchet), and that mean offset (0.08 mm on the cylinder at 9.6 N,
+# measured) is part of max|x(t)| but not of the vibration.
 A = "h1_amplitude_mm"
 
 
@@ -67,21 +67,26 @@ def test_the_screen_shows_the_coupling_the_rig_was_calibrated_for(study):
     assert "Coupling screen" in (out / "report.html").read_text()
 
 
-def test_out_of_phase_the_three_dampers_dissipate_alike(results):
-    """Out of phase the damper slides sideways whatever its shape: at 30 N the friction
-    energies at resonance are within 15 % of their mean (measured 42.8 / 41.3 / 38.1 mJ
-    for cone / cylinder / wedge; the paper's Table 1 has them alike too).
+def test_out_of_phase_the_three_dampers_vibrate_and_dissipate_alike(results):
+    """Out of phase the damper slides sideways whatever its shape: at 30 N each damper's
+    harmonic-1 peak and friction energy at resonance are within 15 % of the three
+    dampers' mean (measured: peaks 0.364 / 0.296 / 0.372 mm, energies 37.9 / 33.5 /
+    38.6 mJ for cone / cylinder / wedge; the widest pair, cylinder against wedge,
+    differs by 26 % in peak). At 9.6 N the peaks are alike too (0.283 / 0.272 / 0.332
+    mm).
 
-    What does not hold on this rig (docs/FINDINGS.md): the peaks. At 9.6 N the
-    cylinder and the wedge come out stuck (no friction energy) with a mean offset of
-    -0.15 mm, while the cone slips; at 30 N their harmonic-1 peaks are 0.73 and
-    0.81 mm against the cone's 0.49 mm. The coupling screen puts their slip onset at
-    2.4 and 3.3 N, so the stuck solutions are the harmonic balance holding a wedged
-    mean state; it is reported as found, and the peaks are not asserted alike."""
-    s = [one(results, d, 180.0, HIGH) for d in ("cone", "cylinder", "wedge")]
-    e = np.array([x["friction_energy_mj"] for x in s])
+    This holds with the rig's mu 0.3. With mu 0.5 on its 30 deg faces (mu / tan(beta)
+    = 0.87) the cylinder and the wedge ratchet into the groove and lock there, stuck
+    with twice the preload, and their peaks at 30 N were 2-2.5 times the cone's: a
+    state a run-up from rest reaches too (benchmarks/runup_ratchet.py, docs/FINDINGS.md).
+    """
+    for force in (MID, HIGH):
+        s = [one(results, d, 180.0, force) for d in ("cone", "cylinder", "wedge")]
+        a = np.array([x[A] for x in s])
+        assert np.all(np.abs(a / a.mean() - 1) <= 0.15), (force, a)
+    e = np.array([x["friction_energy_mj"] for x in s])  # at 30 N
     assert e.min() > 1.0, e
-    assert np.ptp(e) < 0.15 * e.mean(), e
+    assert np.all(np.abs(e / e.mean() - 1) <= 0.15), e
 
 
 def test_in_phase_the_cylinder_rolls_and_stays_linear(results):
@@ -114,12 +119,12 @@ def test_in_phase_the_cone_levels_off_below_the_wedge(results):
 def test_in_phase_the_cone_keeps_contact_slipping_at_one_end_and_opening_at_the_other(results):
     """At 30 N every pair of the cone works (none stuck for the whole period), none
     separates for the whole period, and each line slips at one end and opens for part
-    of the period at the other (measured: 11 stick-slip and 12 partial-separation pairs
-    per line).
+    of the period at the other (measured: 22 stick-slip pairs and one partially
+    separating pair at the far end, on each line).
 
     The paper's Fig. 12 shows stuck line centres with slipping ends; on this rig the
-    cone's lines do not roll about their middle (measured at 3.84 N: one half of each
-    line stuck, the other slipping or opening), so that is not asserted (see
+    cone's lines do not roll about their middle (measured at 9.6 N: every pair slips
+    but a few near the far end, which stick or open), so that is not asserted (see
     docs/FINDINGS.md)."""
     c = results.select(damper="cone", phase_deg=0.0, force_n=HIGH)[0]
     st = c.branch.status[c.peak_index]
