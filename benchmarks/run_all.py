@@ -10,7 +10,8 @@ Parts (``--parts``, default all, in this order):
     fidelity    upd study studies/fidelity.toml: error against compute time per knob
     robustness  upd study studies/robustness.toml: the failure map of the solution methods
     runup       benchmarks/runup_ratchet.py: the cylinder out of phase at 9.6 N on the
-                paper-like rig, harmonic balance against a 400-period run-up from rest
+                paper-like rig with mu 0.5 (it ratchets), harmonic balance against a
+                500-period run-up from rest
 
 Each part writes into its own folder under ``--out`` and its console output
 to ``<part>.log`` there; ``summary.json`` records the exit code and wall

@@ -17,7 +17,8 @@ docs/FINDINGS.md. A run can be continued (``--continue``) from the state it
 saved.
 
     .venv/bin/python benchmarks/runup_ratchet.py --damper cylinder --force 9.6 \\
-        --geometry geometry/paper_rig.toml --periods 400 --out results/runup
+        --mu 0.5 --cf 10000 --periods 500 --out results/runup   # ratchets and locks
+    .venv/bin/python benchmarks/runup_ratchet.py --periods 300 --out results/runup  # mu 0.3: slips
 """
 
 from __future__ import annotations
@@ -41,6 +42,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--phase", type=float, default=180.0, help="inter-blade phase, deg")
     ap.add_argument("--geometry", default=str(ROOT / "geometry" / "paper_rig.toml"))
     ap.add_argument("--mesh-size", type=float, default=14.0, help="mm")
+    ap.add_argument(
+        "--mu", type=float, default=None, help="friction coefficient (default: the rig's)"
+    )
+    ap.add_argument(
+        "--cf", type=float, default=None, help="centrifugal force, N (default: the rig's)"
+    )
     ap.add_argument("--periods", type=int, default=400, help="periods to integrate")
     ap.add_argument("--steps", type=int, default=128, help="steps per period")
     ap.add_argument("--ramp", type=float, default=0.0, help="ramp the force in over N periods")
