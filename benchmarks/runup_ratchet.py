@@ -67,12 +67,15 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     tag = f"{a.damper}_{a.phase:g}deg_{a.force:g}N"
+    extra = {k: v for k, v in (("mu", a.mu), ("cf", a.cf)) if v is not None}
+    tag += "".join(f"_{k}{v:g}" for k, v in extra.items())
     m = wb.model(
         a.damper,
         out=out / "cache",
         geometry=a.geometry,
         mesh_size=a.mesh_size,
         harmonics=[0, 1, 2, 3],
+        **extra,
     )
     t0 = time.perf_counter()
     c = wb.frf(m, force_n=a.force, phase_deg=a.phase)
@@ -137,6 +140,7 @@ def main(argv: list[str] | None = None) -> int:
         force_n=a.force,
         phase_deg=a.phase,
         geometry=a.geometry,
+        cf_n=m.settings.get("cf"),
         freq_hz=f_pk,
         hbm_h1_mm=hbm_h1 * 1e3,
         hbm_mean_mm=hbm_mean * 1e3,
@@ -149,6 +153,7 @@ def main(argv: list[str] | None = None) -> int:
         end_mean_mm=float(mean[-1] * 1e3),
         end_normal_ratio=float(nr[-1]),
         end_slip_samples=int(slip[-1]),
+        mu=float(m.prepared.assembled.mu[0]),
         change_last_10_periods=float(abs(h1[-1] - h1[-11]) / h1[-1]) if h1.size > 11 else None,
     )
     (out / f"{tag}.json").write_text(json.dumps(rec, indent=1))
@@ -177,8 +182,9 @@ def _plot(path: Path, rec: dict, h1, mean, nr, slip) -> None:
     ax2.set_ylabel("slipping samples\nx pairs per period", color="C3")
     ax[2].set_ylabel("mean normal load /\npreload (-)", color="C2")
     ax[2].set_xlabel("period")
+    mu = f", mu {rec['mu']:g}" if rec.get("mu") is not None else ""
     fig.suptitle(
-        f"{rec['damper']}, {rec['phase_deg']:g} deg, {rec['force_n']:g} N at "
+        f"{rec['damper']}, {rec['phase_deg']:g} deg, {rec['force_n']:g} N{mu} at "
         f"{rec['freq_hz']:.1f} Hz: run-up from rest (lines) vs harmonic balance (dashed)",
         fontsize=9,
     )
