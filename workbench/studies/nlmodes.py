@@ -151,6 +151,7 @@ def study_backbones(
                 f1, band = z["f1"], tuple(float(v) for v in z["band"])
         else:
             t0 = time.perf_counter()
+            log.info("backbone %s (%d of %d): computing", label, len(backbones) + 1, len(groups))
             if md not in prepared:
                 prepared[md] = prepare_model(c0, out)
             nm, f1, band = family_backbone(
