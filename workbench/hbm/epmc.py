@@ -21,7 +21,7 @@ from ..errors import InputError, SolveError, check_int
 from .aft import aft, work_per_cycle
 from .balance import loop_dissipation, observation
 from .fourier import Fourier
-from .system import System, modal_damping
+from .system import System
 
 TWO_PI = 2.0 * np.pi
 
@@ -43,12 +43,7 @@ class Epmc:
         n = self.n = system.n
         self.M = system.M
         self.Kr = system.regularised_stiffness()
-        if system.C is not None:
-            self.C = system.C
-        elif system.zeta is not None:
-            self.C = modal_damping(system.M, system.K, system.zeta, system.contacts)
-        else:
-            self.C = np.zeros((n, n))
+        self.C = system.damping_matrix()
         lam, phi = sla.eigh(self.Kr, self.M)
         if lam.min() <= 1e-12 * max(abs(lam).max(), 1e-300):
             raise SolveError(

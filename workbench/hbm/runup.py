@@ -39,7 +39,7 @@ from ..contact import get_law
 from ..contact.march import specialise
 from ..errors import InputError, SolveError, check_int, check_range
 from .balance import excitation_vector, observation
-from .system import System, modal_damping
+from .system import System
 
 
 @dataclass
@@ -170,10 +170,7 @@ def runup(
         raise InputError("system.contacts", None, "a model with contact pairs")
     law = get_law(el.law)
     n = system.n
-    C = system.C
-    if C is None:
-        C = (modal_damping(system.M, system.K, system.zeta, el) if system.zeta is not None
-             else np.zeros((n, n)))  # fmt: skip
+    C = system.damping_matrix()
     Wd = el.W.toarray()
     n_el = el.n_el
     omega = 2.0 * np.pi * freq

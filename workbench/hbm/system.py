@@ -147,6 +147,14 @@ class System:
             f += self.contacts.balance_force()
         return f
 
+    def damping_matrix(self) -> np.ndarray:
+        """The viscous matrix (n x n, N s/m): ``C``, else modal damping ``zeta``, else zero."""
+        if self.C is not None:
+            return self.C
+        if self.zeta is not None:
+            return modal_damping(self.M, self.K, self.zeta, self.contacts)
+        return np.zeros((self.n, self.n))
+
     def rigid_modes(self) -> np.ndarray:
         """(n, r) the rigid-body modes of ``K`` alone (bodies held only by contacts)."""
         lam, vec = sla.eigh(self.K, self.M)

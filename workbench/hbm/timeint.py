@@ -209,14 +209,7 @@ def time_response(
         raise InputError("system.n", n, "at most 200 DOFs for the dense time-integration reference")
     F = level * excitation_vector(system, f1)
     O = observation(system, outputs)
-    C = system.C
-    if C is None:
-        if system.zeta is not None:
-            from .system import modal_damping
-
-            C = modal_damping(system.M, system.K, system.zeta, system.contacts)
-        else:
-            C = np.zeros((n, n))
+    C = system.damping_matrix()
     el = system.contacts
     if el is None:
         Wd = np.zeros((0, n))
