@@ -341,6 +341,15 @@ OPTIONS: tuple[Option, ...] = (
         "their check against the curves (workbench/studies/nlmodes.py)",
         "solver",
     ),
+    Option(
+        "field-shapes",
+        "bool",
+        False,
+        "also write cases/<case>_peak_field.vtu: the displacement at each curve's peak on "
+        "the full rig and damper meshes (ParaView; about one reduction's eigen solve per "
+        "damper, workbench/studies/fields.py)",
+        "solver",
+    ),
     # sweeps and the fidelity/robustness studies
     Option(
         "sweep",

@@ -84,6 +84,85 @@ def _dense(comm, local: np.ndarray, n_global_rows: int):
     return D
 
 
+@dataclass
+class InterfaceSplit:
+    """A body's DOFs split into interface (b) and interior (i) rows, this rank's share.
+
+    ``mine``: positions (interface order) of this rank's interface DOFs, in the
+    sorted order PETSc's index set holds them; ``is_order``: the same over all
+    ranks (index-set position -> interface position); ``Kib``/``Mib``: this
+    rank's interior rows, columns in index-set order.
+    """
+
+    mine: np.ndarray
+    my_b: np.ndarray
+    is_order: np.ndarray
+    interior: np.ndarray
+    n_i: int
+    is_b: object
+    K_ii: object
+    M_ii: object
+    Kib: object
+    Mib: object
+    sign_w: np.ndarray
+
+
+def split_interface(body: ElasticBody, nodes: InterfaceNodes) -> InterfaceSplit:
+    """Index sets and sub-matrices of ``body`` for the interface ``nodes`` (collective)."""
+    from petsc4py import PETSc
+
+    comm = body.comm
+    K, M = body.K, body.M
+    off, nloc = body.dof_offset, body.n_local
+    b_dofs = nodes.dofs()  # interface order
+    nb = len(b_dofs)
+    mine = np.flatnonzero((b_dofs >= off) & (b_dofs < off + nloc))  # positions in iface order
+    my_b = b_dofs[mine]
+    order = np.argsort(my_b, kind="stable")  # PETSc wants sorted index sets
+    mine, my_b = mine[order], my_b[order]
+    is_order = np.concatenate(comm.allgather(mine)).astype(int)  # IS position -> iface pos
+    interior = np.setdiff1d(np.arange(off, off + nloc, dtype=np.int64), my_b)
+    is_b = PETSc.IS().createGeneral(my_b.astype(PETSc.IntType), comm=comm)
+    is_i = PETSc.IS().createGeneral(interior.astype(PETSc.IntType), comm=comm)
+    # weights for the sign of the modes: coordinates of the interior DOFs
+    ld = interior - off
+    xyz = body.owned_node_coords()[ld // 3]
+    return InterfaceSplit(
+        mine=mine,
+        my_b=my_b,
+        is_order=is_order,
+        interior=interior,
+        n_i=comm.allreduce(len(interior)),
+        is_b=is_b,
+        K_ii=K.createSubMatrix(is_i, is_i),
+        M_ii=M.createSubMatrix(is_i, is_i),
+        Kib=_local_csr(K.createSubMatrix(is_i, is_b), nb),
+        Mib=_local_csr(M.createSubMatrix(is_i, is_b), nb),
+        sign_w=sign_weight(xyz, ld % 3),
+    )
+
+
+def interface_modes(sp_: InterfaceSplit, n_modes: int, name: str, comm):
+    """The fixed-interface modes (columns, this rank's interior rows, signs fixed) and
+    the eigen solution holding the MUMPS factor of K_ii."""
+    sol = eigen_solve(
+        sp_.K_ii,
+        sp_.M_ii,
+        n_modes,
+        sigma=0.0,
+        prefix="upd_cb_",
+        what=f"{name} fixed-interface modes",
+    )
+    cols = []
+    for v in sol.vectors:
+        a = v.getArray().copy()
+        if comm.allreduce(float(sp_.sign_w @ a)) < 0:
+            a = -a
+        cols.append(a)
+    Phi = np.column_stack(cols) if cols else np.zeros((len(sp_.interior), 0))
+    return Phi, sol
+
+
 def craig_bampton(
     body: ElasticBody,
     nodes: InterfaceNodes,
@@ -96,54 +175,24 @@ def craig_bampton(
 
     comm = body.comm
     K, M = body.K, body.M
-    off, nloc = body.dof_offset, body.n_local
-    b_dofs = nodes.dofs()  # interface order
-    nb = len(b_dofs)
+    nb = 3 * nodes.n
     if n_modes < 0:
         raise InputError("n_modes", n_modes, "a whole number >= 0")
 
     with stage(timings, "partition"):
-        mine = np.flatnonzero((b_dofs >= off) & (b_dofs < off + nloc))  # positions in iface order
-        my_b = b_dofs[mine]
-        order = np.argsort(my_b, kind="stable")  # PETSc wants sorted index sets
-        mine, my_b = mine[order], my_b[order]
-        is_order = np.concatenate(comm.allgather(mine)).astype(int)  # IS position -> iface pos
-        interior = np.setdiff1d(np.arange(off, off + nloc, dtype=np.int64), my_b)
-        is_b = PETSc.IS().createGeneral(my_b.astype(PETSc.IntType), comm=comm)
-        is_i = PETSc.IS().createGeneral(interior.astype(PETSc.IntType), comm=comm)
-        n_i = comm.allreduce(len(interior))
-        K_ii = K.createSubMatrix(is_i, is_i)
-        M_ii = M.createSubMatrix(is_i, is_i)
-        Kib = _local_csr(K.createSubMatrix(is_i, is_b), nb)
-        Mib = _local_csr(M.createSubMatrix(is_i, is_b), nb)
-        K_bb = allrows(comm, _local_csr(K.createSubMatrix(is_b, is_b), nb).toarray())
-        M_bb = allrows(comm, _local_csr(M.createSubMatrix(is_b, is_b), nb).toarray())
-        # weights for the sign of the modes: coordinates of the interior DOFs
-        ld = interior - off
-        xyz = body.owned_node_coords()[ld // 3]
-        w = sign_weight(xyz, ld % 3)
+        sp_ = split_interface(body, nodes)
+    is_order, interior, n_i = sp_.is_order, sp_.interior, sp_.n_i
+    K_ii, M_ii, Kib, Mib = sp_.K_ii, sp_.M_ii, sp_.Kib, sp_.Mib
+    K_bb = allrows(comm, _local_csr(K.createSubMatrix(sp_.is_b, sp_.is_b), nb).toarray())
+    M_bb = allrows(comm, _local_csr(M.createSubMatrix(sp_.is_b, sp_.is_b), nb).toarray())
 
     # fixed-interface modes; the shift-and-invert transform factorises K_ii once
     lam = np.zeros(0)
     Phi = np.zeros((len(interior), 0))
     with stage(timings, "eigen"):
         if n_modes > 0:
-            sol = eigen_solve(
-                K_ii,
-                M_ii,
-                n_modes,
-                sigma=0.0,
-                prefix="upd_cb_",
-                what=f"{body.name} fixed-interface modes",
-            )
+            Phi, sol = interface_modes(sp_, n_modes, body.name, comm)
             lam = sol.eigenvalues
-            cols = []
-            for v in sol.vectors:
-                a = v.getArray().copy()
-                if comm.allreduce(float(w @ a)) < 0:
-                    a = -a
-                cols.append(a)
-            Phi = np.column_stack(cols) if cols else Phi
             F = sol.factor()
             keep = sol.eps
         else:

@@ -73,8 +73,8 @@ _CASES = (
     "band-margin",
 )
 KIND_OPTIONS: dict[str, tuple[str, ...]] = {
-    "comparison": ("name", "kind", *_CASES, *_MODEL, *_SOLVE),
-    "sweep": ("name", "kind", "sweep", "sweep-values", *_CASES, *_MODEL, *_SOLVE),
+    "comparison": ("name", "kind", *_CASES, *_MODEL, *_SOLVE, "field-shapes"),
+    "sweep": ("name", "kind", "sweep", "sweep-values", *_CASES, *_MODEL, *_SOLVE, "field-shapes"),
     "fidelity": (
         "name",
         "kind",

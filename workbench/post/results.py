@@ -44,6 +44,12 @@ def family_name(phase_deg: float) -> str:
     return f"phase {p:g} deg"
 
 
+def case_id(case) -> str:
+    """File-name id of a case (a plan Case or a CaseResult): damper-phase-force[-variant]."""
+    v = f"-{case.variant}" if case.variant else ""
+    return f"{case.damper}-{case.phase_deg:g}deg-{case.force_n:g}N{v}".replace("=", "")
+
+
 @dataclass
 class CaseResult:
     """One computed case and its frame (damper, phase, force, knobs, contact layout)."""
@@ -62,8 +68,7 @@ class CaseResult:
 
     @property
     def case_id(self) -> str:
-        v = f"-{self.variant}" if self.variant else ""
-        return f"{self.damper}-{self.phase_deg:g}deg-{self.force_n:g}N{v}".replace("=", "")
+        return case_id(self)
 
     @property
     def family(self) -> str:

@@ -225,6 +225,49 @@ def write_case_peak(
     return write_vtu(path, case.points, point_data=pd, field_data=fd)
 
 
+def write_case_field(path: str | Path, case, rig, damper, fields: dict[str, list]) -> Path:
+    """Rig and damper meshes with a case's peak displacement (see workbench/studies/fields.py).
+
+    ``rig``/``damper``: BodyShapes (points, VTK cells); ``fields``: "cos",
+    "sin" and optionally "mean", each [rig (n, 3), damper (n, 3)] in m.
+    """
+    n_r = len(rig.points)
+    npc = int(damper.cells[0]) + 1  # count, then the nodes of each cell
+    cells_d = np.asarray(damper.cells, dtype=np.int64).reshape(-1, npc).copy()
+    cells_d[:, 1:] += n_r
+    pd = {
+        f"disp_{k}_mm": np.vstack(v) * 1e3 for k, v in fields.items() if k in ("cos", "sin", "mean")
+    }
+    pd["disp_amp_mm"] = np.hypot(pd["disp_cos_mm"], pd["disp_sin_mm"])
+    pd["body"] = np.r_[np.zeros(n_r, np.int32), np.ones(len(damper.points), np.int32)]
+    i = case.peak_index
+    return write_vtu(
+        path,
+        np.vstack([rig.points, damper.points]),
+        np.r_[np.asarray(rig.cells, np.int64), cells_d.ravel()],
+        np.r_[rig.celltypes, damper.celltypes].astype(np.uint8),
+        point_data=pd,
+        field_data={
+            "digest48": _digest48(case.digest),
+            "freq_hz": float(case.freq_hz[i]),
+            "force_n": float(case.force_n),
+        },
+    )
+
+
+def has_digest(path: Path, digest: str) -> bool:
+    """True when ``path`` is a readable VTU whose field data carry this case digest."""
+    if not path.is_file():
+        return False
+    try:
+        import pyvista as pv
+
+        g = pv.read(str(path))
+        return int(np.atleast_1d(g.field_data["digest48"])[0]) == _digest48(digest)
+    except Exception:  # noqa: BLE001 - an unreadable file is rewritten
+        return False
+
+
 def has_shape(path: Path, digest: str) -> bool:
     """True when ``path`` is a peak file of this digest that carries the relative motion."""
     if not path.is_file():

@@ -59,6 +59,8 @@ class PreparedModel:
     contact_params: Any = None
     # stage -> what it cost when it was computed, for the stages reused from the cache
     cached: dict[str, float] = field(default_factory=dict)
+    # the reduced models ("rig", "damper"), for full-mesh fields (studies/fields.py)
+    reduced: dict[str, Any] = field(default_factory=dict)
 
 
 def _comm():
@@ -201,7 +203,7 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
             W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt, kn=model.kn, n0=model.n0
         )
         system = System(M=model.M, K=model.K, zeta=s["damping"], contacts=contacts)
-    return PreparedModel(geom, gdir, model, system, {}, timings, cparams, cached)
+    return PreparedModel(geom, gdir, model, system, {}, timings, cparams, cached, reduced)
 
 
 def _older(path: Path, t0: float) -> bool:
@@ -324,8 +326,14 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         todo_ids = comm.bcast(todo_ids, root=0)
     todo = [c for c in cases if c.digest in set(todo_ids)]
     need_models = list(dict.fromkeys(c.model_digest for c in todo))
+    if spec.field_shapes:  # the peak fields need the model of every case still without one
+        from .fields import models_missing_fields
+
+        more = models_missing_fields(cases, out) if rank == 0 else None
+        more = comm.bcast(more, root=0) if comm is not None else more
+        need_models += [md for md in more if md not in need_models]
     for md in need_models:
-        c = next(x for x in todo if x.model_digest == md)
+        c = next(x for x in cases if x.model_digest == md)
         log.info("model for %s: geometry, reduction, assembly", c.damper)
         prepared[md] = prepare_model(c, out, force=force, comm=comm)
         for k, v in prepared[md].timings.items():
