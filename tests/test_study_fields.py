@@ -72,7 +72,7 @@ def test_field_at_the_contacts_is_the_pair_relative_motion(fields):
         body = np.asarray(g.point_data["body"])
         pts = np.asarray(g.points)
         rel = []
-        for k, x in enumerate(np.asarray(pairs.points)):
+        for x in np.asarray(pairs.points):
             u = {}
             for b in (0, 1):
                 sel = np.flatnonzero(body == b)
