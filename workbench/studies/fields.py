@@ -68,9 +68,7 @@ def models_missing_fields(cases: list, out: Path) -> list[str]:
     from ..post.vtk_out import has_digest
 
     return list(
-        dict.fromkeys(
-            c.model_digest for c in cases if not has_digest(field_path(out, c), c.digest)
-        )
+        dict.fromkeys(c.model_digest for c in cases if not has_digest(field_path(out, c), c.digest))
     )
 
 
