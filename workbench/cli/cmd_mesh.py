@@ -80,7 +80,7 @@ def run(args: argparse.Namespace, ctx: Context) -> dict:
         "max_pair_gap_m",
         "max_point_offset_m",
     )
-    summary = {"damper": geo.damper, **{k: s[k] for k in keys}}
+    summary = {"out": str(out), "damper": geo.damper, **{k: s[k] for k in keys}}
     summary.update(
         damper_volume_m3=geo.damper_volume_m3,
         damper_volume_exact_m3=s["damper_volume_exact_m3"],

@@ -95,7 +95,7 @@ def run(args: argparse.Namespace, ctx: Context) -> dict:
         shapes=not args.no_png,
         timings=ctx.timings,
     )
-    summary = res.summary()
+    summary = {"out": str(out), **res.summary()}
     if not args.no_png and mpi_rank() == 0:
         from ..render.modes import render_modes
 

@@ -89,7 +89,12 @@ def run(args: argparse.Namespace, ctx: Context) -> dict:
     from ..fe.reduce import cached_model, reduce_body, save_model
 
     bodies = {}
-    summary: dict = {"damper": geom.damper, "geometry_digest": geom.digest, "bodies": {}}
+    summary: dict = {
+        "out": str(out),
+        "damper": geom.damper,
+        "geometry_digest": geom.digest,
+        "bodies": {},
+    }
     for name, rigid in (("rig", False), ("damper", bool(args.rigid_damper))):
         cached = cached_model(geom, name, n_modes=n_modes, rigid=rigid, cache_dir=out / "cache")
         t: dict[str, float] = {}

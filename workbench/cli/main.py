@@ -113,7 +113,9 @@ def _common(suppress: bool) -> argparse.ArgumentParser:
         type=Path,
         metavar="DIR",
         default=d(None),
-        help="folder for the files this command writes",
+        help="folder for the files this command writes (default: a folder under ./results "
+        "named after the command and its damper or study, e.g. results/modes_cone; created "
+        "if missing, and printed as out: in the summary)",
     )
     g.add_argument("-v", "--verbose", action="count", default=d(0), help="more log messages")
     g.add_argument(
