@@ -28,7 +28,9 @@ unilateral spring where the contact opens, stored as ``work_normal``
 The friction energy reported per element is the trapezoid rule on its
 converged loop, ``sum_j (T_j + T_j+1) / 2 . (u_j+1 - u_j)`` over the AFT
 samples (DESIGN.md section 6): the dissipation of the law for the sampled
-motion, never negative. It agrees with the harmonic work of the same
+motion (a loop that hardly opens, under a varying normal load, can come
+out slightly negative from the sampling; summaries report a negative total
+as 0 with a note). It agrees with the harmonic work of the same
 element to O(1/nt^2) while the normal load stays positive; where the
 contact opens and the force jumps, the harmonic work (the quantity that
 balances the excitation) can differ from it and even change sign.

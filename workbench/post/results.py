@@ -161,7 +161,7 @@ class CaseResult:
             # the harmonic-1 peak, at its own frequency: the vibration without the mean
             # (a stuck damper's mean position depends on its history, and it shifts max|x|)
             **self._h1_peak(),
-            "friction_energy_mj": float(self.energy_mj[i].sum()) if ok else None,
+            **self._energy_at(i),
             "peak_stable": bool(self.stable[i]) if ok else None,
             "n_points": self.branch.n_points,
             "n_unstable": int(np.sum(self.branch.unstable)),
@@ -178,6 +178,23 @@ class CaseResult:
         out.update({f"share_{k}": v for k, v in self.status_shares().items()})
         out.update(self._peak_bound())
         return out
+
+    def _energy_at(self, i: int) -> dict[str, Any]:
+        """Friction energy per cycle at point ``i``; a negative loop integral (time
+        sampling of a nearly closed loop: dissipation cannot be negative) is reported
+        as 0 with a note that gives the computed value."""
+        if i < 0:
+            return {"friction_energy_mj": None, "friction_energy_note": ""}
+        e = float(self.energy_mj[i].sum())
+        if e >= 0:
+            return {"friction_energy_mj": e, "friction_energy_note": ""}
+        return {
+            "friction_energy_mj": 0.0,
+            "friction_energy_note": (
+                f"the loop integral came out {e:.2e} mJ (time sampling of loops that hardly "
+                "open); dissipation cannot be negative: reported as 0 (stuck)"
+            ),
+        }
 
     def _h1_peak(self) -> dict[str, Any]:
         b = self.branch.summary(self.output)
@@ -202,6 +219,7 @@ class CaseResult:
                 "peak_frequency_hz",
                 "peak_amplitude_mm",
                 "friction_energy_mj",
+                "friction_energy_note",
                 "peak_stable",
                 "peak_stability",
                 "h1_amplitude_mm",
