@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from .main import Context, num
+from .main import Context, add_geometry_options
 
 HELP = "mesh the rig and a damper (second-order gmsh) with node-to-node contact points"
 DESCRIPTION = """\
@@ -30,20 +29,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--damper", required=True, metavar="{" + ",".join(names()) + "}", help="damper shape"
     )
-    parser.add_argument(
-        "--size",
-        type=num,
-        metavar="MM",
-        default=None,
-        help="global element size of the rig, mm (default: [rig.mesh] size_mm)",
-    )
-    parser.add_argument(
-        "--geometry",
-        type=Path,
-        metavar="FILE",
-        default=None,
-        help="TOML file overriding tables of the default geometry files",
-    )
+    add_geometry_options(parser)
     parser.add_argument(
         "--no-png", action="store_true", help="skip the picture (faster; the meshes are the same)"
     )

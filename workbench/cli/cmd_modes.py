@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from .main import Context, num
+from .main import Context, add_geometry_options, num
 
 HELP = "modes of the rig with the damper stuck or free (dolfinx + SLEPc), first bending named"
 DESCRIPTION = """\
@@ -45,27 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--n", type=num, default=10, metavar="N", help="number of modes (default 10)"
     )
-    parser.add_argument(
-        "--size",
-        type=num,
-        metavar="MM",
-        default=None,
-        help="global element size of the rig, mm (default: [rig.mesh] size_mm)",
-    )
-    parser.add_argument(
-        "--geometry",
-        type=Path,
-        metavar="FILE",
-        default=None,
-        help="TOML file overriding tables of the default geometry files",
-    )
-    parser.add_argument(
-        "--contact-file",
-        type=Path,
-        metavar="FILE",
-        default=None,
-        help="contact parameters TOML (default geometry/contact.toml)",
-    )
+    add_geometry_options(parser, "contact parameters TOML (default geometry/contact.toml)")
     parser.add_argument("--no-png", action="store_true", help="skip the mode-shape pictures")
 
 

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from .main import Context, num
+from .main import Context, add_geometry_options, num
 
 HELP = "Craig-Bampton reduced models of the rig and the damper (HDF5, cached)"
 DESCRIPTION = """\
@@ -43,26 +42,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         action="store_true",
         help="a rigid 6-DOF damper instead of its Craig-Bampton model",
     )
-    parser.add_argument(
-        "--size",
-        type=num,
-        metavar="MM",
-        default=None,
-        help="global element size of the rig, mm (default: [rig.mesh] size_mm)",
-    )
-    parser.add_argument(
-        "--geometry",
-        type=Path,
-        metavar="FILE",
-        default=None,
-        help="TOML file overriding tables of the default geometry files",
-    )
-    parser.add_argument(
-        "--contact-file",
-        type=Path,
-        metavar="FILE",
-        default=None,
-        help="contact parameters of the stuck check (default geometry/contact.toml)",
+    add_geometry_options(
+        parser, "contact parameters of the stuck check (default geometry/contact.toml)"
     )
     parser.add_argument("--force", action="store_true", help="rebuild even if cached")
 

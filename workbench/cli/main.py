@@ -131,6 +131,28 @@ def _common(suppress: bool) -> argparse.ArgumentParser:
     return p
 
 
+def add_geometry_options(parser: argparse.ArgumentParser, contact_help: str | None = None) -> None:
+    """--size and --geometry (and --contact-file with its help, if given) of the FE commands."""
+    parser.add_argument(
+        "--size",
+        type=num,
+        metavar="MM",
+        default=None,
+        help="global element size of the rig, mm (default: [rig.mesh] size_mm)",
+    )
+    parser.add_argument(
+        "--geometry",
+        type=Path,
+        metavar="FILE",
+        default=None,
+        help="TOML file overriding tables of the default geometry files",
+    )
+    if contact_help is not None:
+        parser.add_argument(
+            "--contact-file", type=Path, metavar="FILE", default=None, help=contact_help
+        )
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="upd",
