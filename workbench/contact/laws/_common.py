@@ -33,3 +33,23 @@ def normal(un, kn, n0, f, Fu, want_jac):
     if want_jac:
         Fu[2, 2] = kn
     return N
+
+
+@njit(cache=True)
+def begin(u, kn, n0, want_jac, f, s_new, Fu, Fs, Su, Ss):
+    """The part of a step every tangential law with state ``[T1, T2, u1, u2]`` shares:
+    clear the derivatives, remember the displacement, apply the normal law, and on
+    separation (returned N <= 0) set the tangential force and state to zero."""
+    clear(want_jac, Fu, Fs, Su, Ss)
+    s_new[2] = u[0]
+    s_new[3] = u[1]
+    if want_jac:
+        Su[2, 0] = 1.0
+        Su[3, 1] = 1.0
+    N = normal(u[2], kn, n0, f, Fu, want_jac)
+    if N <= 0.0:
+        f[0] = 0.0
+        f[1] = 0.0
+        s_new[0] = 0.0
+        s_new[1] = 0.0
+    return N

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._common import clear, normal
+from ._common import begin
 
 NAME = "dahl"
 N_STATE = 4
@@ -26,19 +26,15 @@ N_STATE = 4
 
 @njit(cache=True)
 def step(u, s, mu, kt1, kt2, kn, n0, want_jac, f, s_new, Fu, Fs, Su, Ss):
-    clear(want_jac, Fu, Fs, Su, Ss)
-    s_new[2] = u[0]
-    s_new[3] = u[1]
-    if want_jac:
-        Su[2, 0] = 1.0
-        Su[3, 1] = 1.0
-    N = normal(u[2], kn, n0, f, Fu, want_jac)
-    if N <= 0.0 or mu <= 0.0:
+    N = begin(u, kn, n0, want_jac, f, s_new, Fu, Fs, Su, Ss)
+    if N <= 0.0:
+        return 2
+    if mu <= 0.0:  # no friction: no tangential force
         f[0] = 0.0
         f[1] = 0.0
         s_new[0] = 0.0
         s_new[1] = 0.0
-        return 2 if N <= 0.0 else 0
+        return 0
     L = mu * N
     flag = 0
     for a in range(2):
