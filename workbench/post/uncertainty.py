@@ -215,6 +215,41 @@ def statistics(y: np.ndarray, threshold: float | None = None) -> dict[str, float
     return out
 
 
+N_BOOT = 2000
+
+
+def ranking_confidence(
+    peaks: np.ndarray, names: list[str], seed: int = 0, n_boot: int = N_BOOT
+) -> dict[str, Any]:
+    """How sure the smallest-95th-percentile verdict is, by a paired bootstrap.
+
+    ``peaks`` (n_samples, n_dampers): every damper's peak on the SAME samples
+    (rows). Rows are resampled with replacement ``n_boot`` times; each time
+    the 95th percentile of every column is taken and the smallest wins.
+    Returns the winner on the data, the share of resamples it also wins
+    (``confidence``; near 1/n_dampers means the samples cannot tell), and a
+    90 % interval (5th-95th percentile of the resampled values) of each
+    damper's 95th percentile.
+    """
+    P = np.asarray(peaks, dtype=float)
+    if P.ndim != 2 or P.shape[0] < 2 or P.shape[1] < 2:
+        return {}
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, P.shape[0], size=(n_boot, P.shape[0]))
+    q = np.quantile(P[idx], 0.95, axis=1)  # (n_boot, n_dampers)
+    best = int(np.argmin(np.quantile(P, 0.95, axis=0)))
+    wins = np.bincount(np.argmin(q, axis=1), minlength=P.shape[1]) / n_boot
+    lo, hi = np.quantile(q, 0.05, axis=0), np.quantile(q, 0.95, axis=0)
+    return {
+        "winner": names[best],
+        "confidence": float(wins[best]),
+        "wins": {n: float(w) for n, w in zip(names, wins, strict=True)},
+        "p95_ci90_mm": {n: [float(a), float(b)] for n, a, b in zip(names, lo, hi, strict=True)},
+        "n_samples": int(P.shape[0]),
+        "n_boot": int(n_boot),
+    }
+
+
 def sobol_indices(design: Design, y: np.ndarray, seed: int = 0) -> dict[str, Any]:
     """SALib's first- and total-order Sobol indices of ``y`` over the design's rows.
 
@@ -266,6 +301,7 @@ def analysis_summary(a: dict[str, Any]) -> dict[str, Any]:
         "thresholds_mm": a["thresholds_mm"],
         "groups": answer_rows(a),
         "smallest_p95_peak": a["robust"],
+        "ranking_confidence": {fam: c.get("confidence") for fam, c in a.get("ranking", {}).items()},
     }
 
 
@@ -281,10 +317,23 @@ def headline(a: dict[str, Any]) -> list[str]:
             continue
         n = grp[best]["stats"]["peak_amplitude_mm"]["n_common"]
         others = ", ".join(f"{d} {_p95(r):.4g} mm" for d, r in grp.items() if d != best)
+        conf = a.get("ranking", {}).get(fam, {}).get("confidence")
+        verdict = (
+            ""
+            if conf is None
+            else (
+                f"; it also wins {100 * conf:.0f} % of {N_BOOT} bootstrap resamples"
+                + (
+                    " (the samples cannot tell the dampers apart: raise uq-samples)"
+                    if conf < 0.9
+                    else ""
+                )
+            )
+        )
         lines.append(
             f"{fam}: the {best} has the smallest 95th-percentile peak, "
             f"{_p95(grp[best]):.4g} mm ({others}; over the {n} samples every damper "
-            "solved)"
+            f"solved{verdict})"
         )
     for r in a["groups"]:
         st = r["stats"]["peak_amplitude_mm"]
@@ -306,6 +355,7 @@ def answer_rows(a: dict[str, Any]) -> list[dict[str, Any]]:
     rows = []
     for fam in dict.fromkeys(r["family"] for r in a["groups"]):
         grp = [r for r in a["groups"] if r["family"] == fam]
+        rank = a.get("ranking", {}).get(fam, {})
         for k, r in enumerate(sorted(grp, key=_p95)):
             st = r["stats"]["peak_amplitude_mm"]
             ind = r["indices"]["peak_amplitude_mm"]
@@ -317,6 +367,8 @@ def answer_rows(a: dict[str, Any]) -> list[dict[str, Any]]:
                     "damper": r["damper"],
                     "peak_p50_mm": st.get("p50"),
                     "peak_p95_common_mm": st.get("p95_common"),
+                    "peak_p95_ci90_mm": rank.get("p95_ci90_mm", {}).get(r["damper"]),
+                    "wins_share": rank.get("wins", {}).get(r["damper"]),
                     "n_common": st.get("n_common"),
                     "peak_p95_mm": st.get("p95"),
                     "threshold_mm": r["threshold_mm"],

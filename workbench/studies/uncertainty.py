@@ -73,6 +73,7 @@ from ..post.uncertainty import (
     index_rows,
     make_design,
     parse_distribution,
+    ranking_confidence,
     sobol_indices,
     statistics,
     stats_rows,
@@ -336,8 +337,13 @@ def analyse(
         row["n_failed_ab"] = int(np.asarray(g["failed"])[ab].sum())
         row["case_time_s"] = statistics(g.get("cpu_s", g["hbm_s"]))
         groups.append(row)
-    robust = {}
+    robust, ranking = {}, {}
     for phase in fams:
+        keys = [k for k in results if k[1] == phase]
+        P = np.column_stack([clean[k]["peak_amplitude_mm"][common[phase]] for k in keys])
+        rc = ranking_confidence(P, [k[0] for k in keys], seed=spec.uq_seed)
+        if rc:
+            ranking[family_name(phase)] = rc
         cand = [
             r
             for r in groups
@@ -350,6 +356,7 @@ def analyse(
         "thresholds_mm": thresholds,
         "groups": groups,
         "robust": robust,
+        "ranking": ranking,
         "inputs": {k: d.describe() for k, d in dists.items()},
     }
 
@@ -397,6 +404,7 @@ def write_h5(
             grp.attrs["driver"] = r["driver"] or ""
             grp.attrs["threshold_mm"] = np.nan if r["threshold_mm"] is None else r["threshold_mm"]
         h.attrs["thresholds_mm"] = json.dumps(a["thresholds_mm"])
+        h.attrs["ranking"] = json.dumps(a.get("ranking", {}))
     return path
 
 
