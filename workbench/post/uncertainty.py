@@ -318,18 +318,16 @@ def headline(a: dict[str, Any]) -> list[str]:
         n = grp[best]["stats"]["peak_amplitude_mm"]["n_common"]
         others = ", ".join(f"{d} {_p95(r):.4g} mm" for d, r in grp.items() if d != best)
         conf = a.get("ranking", {}).get(fam, {}).get("confidence")
-        verdict = (
-            ""
-            if conf is None
-            else (
-                f"; it also wins {100 * conf:.0f} % of {N_BOOT} bootstrap resamples"
-                + (
-                    " (the samples cannot tell the dampers apart: raise uq-samples)"
-                    if conf < 0.9
-                    else ""
+        verdict = ""
+        if conf is not None:
+            verdict = f"; it also wins {100 * conf:.0f} % of {N_BOOT} bootstrap resamples"
+            if conf < 0.9:
+                verdict += " (the samples cannot tell the dampers apart: raise uq-samples)"
+            if n < 20:
+                verdict += (
+                    f"; with {n} draws the 95th percentile is near the largest draw and "
+                    "the resamples cannot see tails the draws missed"
                 )
-            )
-        )
         lines.append(
             f"{fam}: the {best} has the smallest 95th-percentile peak, "
             f"{_p95(grp[best]):.4g} mm ({others}; over the {n} samples every damper "
