@@ -92,3 +92,46 @@ def test_fields_are_not_rebuilt_when_current(fields, tmp_path):
     r = run_upd("study", TINY, "--out", out, "--json", "--field-shapes")
     assert r.code == 0, r
     assert {p: p.stat().st_mtime_ns for p in before} == before
+
+
+def test_two_ranks_write_the_same_fields_and_exit(fields, tmp_path):
+    """Under mpirun every rank takes part in the expansion and the run ends (a rank-0-only
+    PETSc session once left the other rank in MPI_Finalize and rank 0 waiting in PETSc's
+    garbage clean-up for ever); the fields equal the serial ones body by body."""
+    import os
+    import subprocess
+    import sys
+
+    from scipy.spatial import cKDTree
+
+    from tests.conftest import ROOT
+
+    serial, _ = fields
+    out = tmp_path / "mpi"
+    shutil.copytree(serial, out)
+    for p in (out / "cases").glob("*_peak_field.vtu"):
+        p.unlink()
+    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    mp = subprocess.run(
+        ["mpirun", "-n", "2", "--oversubscribe", "-x", "OMP_NUM_THREADS=1"]
+        + ["-x", "UPD_NO_PROGRESS=1", sys.executable, "-m", "workbench.cli.main"]
+        + ["study", str(TINY), "--out", str(out), "--field-shapes", "-q"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=env,
+    )
+    assert mp.returncode == 0, mp.stderr[-3000:]
+    for p in sorted((serial / "cases").glob("*_peak_field.vtu")):
+        a, b = pv.read(p), pv.read(out / "cases" / p.name)
+        for body in (0, 1):  # rig and damper share the contact points: match within a body
+            ia = np.flatnonzero(np.asarray(a.point_data["body"]) == body)
+            ib = np.flatnonzero(np.asarray(b.point_data["body"]) == body)
+            d, i = cKDTree(np.asarray(a.points)[ia]).query(np.asarray(b.points)[ib])
+            assert d.max() < 1e-12  # every point of the 2-rank file is a mesh node
+            for k in ("disp_cos_mm", "disp_sin_mm"):
+                va = np.asarray(a.point_data[k])[ia][i]
+                vb = np.asarray(b.point_data[k])[ib]
+                # the reductions differ by round-off between 1 and 2 ranks
+                assert np.abs(va - vb).max() < 1e-8 * np.abs(va).max(), (p.name, body, k)

@@ -13,7 +13,8 @@ field data ``freq_hz``, ``force_n``, ``digest48`` (as the ``_peak.vtu`` files).
 The generalised coordinates come from the solved unknowns (one evaluation
 of the harmonic balance at the stored peak point, no new solve); the
 full-mesh basis is rebuilt per model by :mod:`workbench.fe.expand` (about
-one reduction's eigen solve: 20-30 s per damper on the 9 mm rig), on rank 0.
+one reduction's eigen solve: 20-30 s per damper on the 9 mm rig), by every
+MPI rank together.
 A case whose file already matches its digest is skipped; a failure is
 logged and the study goes on (the file is a by-product).
 """
@@ -73,20 +74,35 @@ def models_missing_fields(cases: list, out: Path) -> list[str]:
 
 
 def write_study_fields(
-    results, out: str | Path, prepared: dict[str, Any], model_of: dict[str, str]
+    results, out: str | Path, prepared: dict[str, Any], model_of: dict[str, str], comm=None
 ) -> list[Path]:
-    """The ``_peak_field.vtu`` of every case with a peak point (rank 0, serial FE)."""
+    """The ``_peak_field.vtu`` of every case with a peak point.
+
+    Collective over ``comm`` (default COMM_WORLD): every rank takes part in
+    the FE expansion (a rank-0-only PETSc session left objects whose
+    clean-up at exit waited for the other ranks); rank 0 decides what is
+    missing and writes the files.
+    """
     from mpi4py import MPI
 
     from ..fe.expand import expand_body
     from ..log import progress_bar
     from ..post.vtk_out import has_digest
 
+    comm = MPI.COMM_WORLD if comm is None else comm
     out = Path(out)
+    todo = None
+    if comm.rank == 0:
+        todo = [
+            k
+            for k, c in enumerate(results.cases)
+            if c.peak_index >= 0 and not has_digest(field_path(out, c), c.digest)
+        ]
+    todo = comm.bcast(todo, root=0)
     groups: dict[str, list] = {}
-    for c in results.cases:
-        if c.peak_index >= 0 and not has_digest(field_path(out, c), c.digest):
-            groups.setdefault(model_of.get(c.digest, ""), []).append(c)
+    for k in todo:
+        c = results.cases[k]
+        groups.setdefault(model_of.get(c.digest, ""), []).append(c)
     paths = []
     with progress_bar("peak fields", total=len(groups), unit="model") as bar:
         for md, cases in groups.items():
@@ -96,7 +112,7 @@ def write_study_fields(
                 bar.update(1)
                 continue
             try:
-                paths += _model_fields(out, cases, prep, expand_body, MPI.COMM_SELF)
+                paths += _model_fields(out, cases, prep, expand_body, comm)
             except Exception as e:  # noqa: BLE001 - a by-product: report and go on
                 log.warning("peak fields of %s not written (%s)", cases[0].damper, e)
             bar.update(1)
@@ -120,6 +136,8 @@ def _model_fields(out: Path, cases: list, prep, expand_body, comm) -> list[Path]
         "damper": expand_body(geom, "damper", prep.reduced["damper"], Q[n_rig:], comm),
     }
     paths = []
+    if comm.rank != 0:  # the gathered fields are on rank 0
+        return paths
     for c, names, j0 in meta:
         fields = {
             r: [shapes[b].disp[j0 + k] for b in ("rig", "damper")] for k, r in enumerate(names)

@@ -35,12 +35,7 @@ def write_outputs(
         c.branch.to_csv(out / "cases" / f"{c.case_id}.csv", unit_scale=1e3, unit="mm")
     from ..post.vtk_out import write_study_peaks
 
-    model_of = {c.digest: c.model_digest for c in plan(spec)}
-    write_study_peaks(results, out, prepared, model_of)
-    if spec.field_shapes:
-        from .fields import write_study_fields
-
-        write_study_fields(results, out, prepared, model_of)
+    write_study_peaks(results, out, prepared, {c.digest: c.model_digest for c in plan(spec)})
     rows = results.summaries()
     write_json(out / "summary.json", rows)
     if results.extras.get("screen"):

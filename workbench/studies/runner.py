@@ -421,6 +421,12 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         cases=[CaseResult.load(case_dir / f"{c.digest}.h5") for c in cases],
         inputs=spec.as_dict(),
     )
+    if spec.field_shapes:  # collective: every rank takes part in the FE expansion
+        from .fields import write_study_fields
+
+        t_f = time.perf_counter()
+        write_study_fields(results, out, prepared, {c.digest: c.model_digest for c in cases}, comm)
+        timings["peak fields"] = time.perf_counter() - t_f
     if rank == 0:
         _add_cached_costs(out, cases, todo, prepared, results, cached_costs)
     results.timings = timings
