@@ -163,6 +163,24 @@ def interface_modes(sp_: InterfaceSplit, n_modes: int, name: str, comm):
     return Phi, sol
 
 
+def interior_factor(sp_: InterfaceSplit, n_modes: int, name: str, comm):
+    """``(Phi, lam, F, keep)``: the fixed-interface modes and eigenvalues (none for
+    ``n_modes == 0``), the MUMPS factor F of K_ii and the PETSc object that holds it
+    (``keep.destroy()`` releases it)."""
+    from petsc4py import PETSc
+
+    if n_modes > 0:
+        Phi, sol = interface_modes(sp_, n_modes, name, comm)
+        return Phi, sol.eigenvalues, sol.factor(), sol.eps
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOptionsPrefix("upd_cb_")
+    ksp.setOperators(sp_.K_ii)
+    with petsc_options("upd_cb_", mumps_defaults(st=False)):
+        ksp.setFromOptions()
+        ksp.setUp()
+    return np.zeros((len(sp_.interior), 0)), np.zeros(0), ksp.getPC().getFactorMatrix(), ksp
+
+
 def craig_bampton(
     body: ElasticBody,
     nodes: InterfaceNodes,
@@ -171,7 +189,6 @@ def craig_bampton(
     timings: dict[str, float] | None = None,
 ) -> CBMatrices:
     """Reduce ``body`` onto the DOFs of ``nodes`` plus ``n_modes`` fixed-interface modes."""
-    from petsc4py import PETSc
 
     comm = body.comm
     K, M = body.K, body.M
@@ -187,23 +204,8 @@ def craig_bampton(
     M_bb = allrows(comm, _local_csr(M.createSubMatrix(sp_.is_b, sp_.is_b), nb).toarray())
 
     # fixed-interface modes; the shift-and-invert transform factorises K_ii once
-    lam = np.zeros(0)
-    Phi = np.zeros((len(interior), 0))
     with stage(timings, "eigen"):
-        if n_modes > 0:
-            Phi, sol = interface_modes(sp_, n_modes, body.name, comm)
-            lam = sol.eigenvalues
-            F = sol.factor()
-            keep = sol.eps
-        else:
-            ksp = PETSc.KSP().create(comm)
-            ksp.setOptionsPrefix("upd_cb_")
-            ksp.setOperators(K_ii)
-            with petsc_options("upd_cb_", mumps_defaults(st=False)):
-                ksp.setFromOptions()
-                ksp.setUp()
-            F = ksp.getPC().getFactorMatrix()
-            keep = ksp
+        Phi, lam, F, keep = interior_factor(sp_, n_modes, body.name, comm)
     if n_modes and np.any(lam <= 0):
         raise SolveError(
             f"{body.name}: fixed-interface problem is singular "
@@ -238,9 +240,7 @@ def craig_bampton(
             raise SolveError(f"{body.name}: constraint modes inaccurate (residual {res / ref:.1e})")
     # release the factorisation (the largest allocation) before the projections
     del F
-    keep.destroy()
-    if n_modes > 0:
-        sol.eps = None
+    keep.destroy()  # the EPS or KSP holding it (the eigen solution itself is not kept)
 
     with stage(timings, "projection"):
         Khat = K_bb + allsum(comm, Kib.T @ Psi)

@@ -27,7 +27,7 @@ import logging
 import numpy as np
 
 from ..errors import SolveError
-from .craig_bampton import _dense, interface_modes, split_interface
+from .craig_bampton import _dense, interior_factor, split_interface
 from .modes import BodyShapes, _gather_shapes, load_bodies
 from .parallel import allsum
 
@@ -78,9 +78,9 @@ def _cb_field(geom, eb, body: str, rm, Q: np.ndarray, comm) -> list[np.ndarray]:
     inv = np.empty(nb, dtype=int)
     inv[sp_.is_order] = np.arange(nb)
     ub, eta = Q[:nb], Q[nb:]
+    Phi, lam, F, keep = interior_factor(sp_, m, body, comm)
+    R = np.zeros((0, 0))
     if m:
-        Phi, sol = interface_modes(sp_, m, body, comm)
-        lam = sol.eigenvalues
         # M_be^T = Phi^T M_ib - Lambda^-1 Phi^T K_ib (index-set column order)
         MbeT = allsum(comm, sp_.Mib.T @ Phi).T - allsum(comm, sp_.Kib.T @ Phi).T / lam[:, None]
         Mbe_new = MbeT.T[inv]
@@ -100,20 +100,6 @@ def _cb_field(geom, eb, body: str, rm, Q: np.ndarray, comm) -> list[np.ndarray]:
                 f"{mixing:.1e}; tolerance {MATCH_TOL:.0e}): was it reduced from another mesh?"
             )
         log.debug("%s: modes matched to the cached model to %.1e", body, mismatch)
-        F, keep = sol.factor(), sol.eps
-    else:
-        from petsc4py import PETSc
-
-        from .solvers import mumps_defaults, petsc_options
-
-        Phi, R = np.zeros((len(sp_.interior), 0)), np.zeros((0, 0))
-        keep = PETSc.KSP().create(comm)
-        keep.setOptionsPrefix("upd_cb_")
-        keep.setOperators(sp_.K_ii)
-        with petsc_options("upd_cb_", mumps_defaults(st=False)):
-            keep.setFromOptions()
-            keep.setUp()
-        F = keep.getPC().getFactorMatrix()
     rhs = -(sp_.Kib @ ub[sp_.is_order])
     B = _dense(comm, rhs, sp_.n_i)
     X = B.duplicate()

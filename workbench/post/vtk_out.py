@@ -255,33 +255,29 @@ def write_case_field(path: str | Path, case, rig, damper, fields: dict[str, list
     )
 
 
-def has_digest(path: Path, digest: str) -> bool:
-    """True when ``path`` is a readable VTU whose field data carry this case digest."""
+def _read_if_digest(path: Path, digest: str):
+    """The grid of ``path`` when it is a readable VTU carrying this case digest, else None."""
     if not path.is_file():
-        return False
+        return None
     try:
         import pyvista as pv
 
         g = pv.read(str(path))
-        return int(np.atleast_1d(g.field_data["digest48"])[0]) == _digest48(digest)
+        ok = int(np.atleast_1d(g.field_data["digest48"])[0]) == _digest48(digest)
     except Exception:  # noqa: BLE001 - an unreadable file is rewritten
-        return False
+        return None
+    return g if ok else None
+
+
+def has_digest(path: Path, digest: str) -> bool:
+    """True when ``path`` is a readable VTU whose field data carry this case digest."""
+    return _read_if_digest(path, digest) is not None
 
 
 def has_shape(path: Path, digest: str) -> bool:
     """True when ``path`` is a peak file of this digest that carries the relative motion."""
-    if not path.is_file():
-        return False
-    try:
-        import pyvista as pv
-
-        g = pv.read(str(path))
-        return (
-            int(np.atleast_1d(g.field_data["digest48"])[0]) == _digest48(digest)
-            and "rel_disp_amp_mm" in g.point_data
-        )
-    except Exception:  # noqa: BLE001 - an unreadable file is rewritten
-        return False
+    g = _read_if_digest(path, digest)
+    return g is not None and "rel_disp_amp_mm" in g.point_data
 
 
 def _digest48(digest: str) -> int:

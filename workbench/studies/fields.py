@@ -64,41 +64,40 @@ def field_path(out: Path, case) -> Path:
     return Path(out) / "cases" / f"{case_id(case)}_peak_field.vtu"
 
 
-def models_missing_fields(cases: list, out: Path) -> list[str]:
-    """Model digests of the planned cases whose field file is absent or stale."""
+def missing_fields(cases: list, out: Path, comm=None) -> list[int]:
+    """Indices of the planned cases whose field file is absent or stale (rank 0 reads the
+    files, every rank of ``comm`` gets the list)."""
     from ..post.vtk_out import has_digest
 
-    return list(
-        dict.fromkeys(c.model_digest for c in cases if not has_digest(field_path(out, c), c.digest))
-    )
+    missing = None
+    if comm is None or comm.rank == 0:
+        missing = [k for k, c in enumerate(cases) if not has_digest(field_path(out, c), c.digest)]
+    return comm.bcast(missing, root=0) if comm is not None else missing
 
 
 def write_study_fields(
-    results, out: str | Path, prepared: dict[str, Any], model_of: dict[str, str], comm=None
+    results,
+    out: str | Path,
+    prepared: dict[str, Any],
+    model_of: dict[str, str],
+    missing: list[int],
+    comm=None,
 ) -> list[Path]:
-    """The ``_peak_field.vtu`` of every case with a peak point.
+    """The ``_peak_field.vtu`` of the cases ``missing`` (indices, :func:`missing_fields`,
+    the same on every rank) that have a peak point.
 
     Collective over ``comm`` (default COMM_WORLD): every rank takes part in
     the FE expansion (a rank-0-only PETSc session left objects whose
-    clean-up at exit waited for the other ranks); rank 0 decides what is
-    missing and writes the files.
+    clean-up at exit waited for the other ranks); rank 0 writes the files.
     """
     from mpi4py import MPI
 
     from ..fe.expand import expand_body
     from ..log import progress_bar
-    from ..post.vtk_out import has_digest
 
     comm = MPI.COMM_WORLD if comm is None else comm
     out = Path(out)
-    todo = None
-    if comm.rank == 0:
-        todo = [
-            k
-            for k, c in enumerate(results.cases)
-            if c.peak_index >= 0 and not has_digest(field_path(out, c), c.digest)
-        ]
-    todo = comm.bcast(todo, root=0)
+    todo = [k for k in missing if results.cases[k].peak_index >= 0]
     groups: dict[str, list] = {}
     for k in todo:
         c = results.cases[k]

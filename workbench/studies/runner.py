@@ -326,12 +326,12 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         todo_ids = comm.bcast(todo_ids, root=0)
     todo = [c for c in cases if c.digest in set(todo_ids)]
     need_models = list(dict.fromkeys(c.model_digest for c in todo))
+    missing: list[int] = []
     if spec.field_shapes:  # the peak fields need the model of every case still without one
-        from .fields import models_missing_fields
+        from .fields import missing_fields
 
-        more = models_missing_fields(cases, out) if rank == 0 else None
-        more = comm.bcast(more, root=0) if comm is not None else more
-        need_models += [md for md in more if md not in need_models]
+        missing = missing_fields(cases, out, comm)
+        need_models = list(dict.fromkeys(need_models + [cases[k].model_digest for k in missing]))
     for md in need_models:
         c = next(x for x in cases if x.model_digest == md)
         log.info("model for %s: geometry, reduction, assembly", c.damper)
@@ -425,7 +425,8 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         from .fields import write_study_fields
 
         t_f = time.perf_counter()
-        write_study_fields(results, out, prepared, {c.digest: c.model_digest for c in cases}, comm)
+        model_of = {c.digest: c.model_digest for c in cases}
+        write_study_fields(results, out, prepared, model_of, missing, comm)
         timings["peak fields"] = time.perf_counter() - t_f
     if rank == 0:
         _add_cached_costs(out, cases, todo, prepared, results, cached_costs)
