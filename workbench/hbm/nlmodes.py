@@ -30,7 +30,8 @@ with ``A = K_r - (k w)^2 M`` and ``B = k w (C - xi M)``::
 plus ``K_r psi_0 + W^T (G_0 - f(0)) / a`` for harmonic 0 (``G = f - K_c u``
 as in :mod:`.balance`). The Jacobian is analytic (the AFT's exact
 derivative for the contacts); each point is solved by PETSc SNES (Newton
-with a backtracking line search, a dense LU of the bordered Jacobian).
+with a backtracking line search, a dense LU of the bordered Jacobian, rebuilt
+every third iteration by default: :mod:`.nlmode_corrector`).
 
 The point equations live in :mod:`.epmc` (:class:`Epmc` on every DOF,
 :class:`EpmcCondensed` on the contact coordinates); this module chooses the
@@ -59,6 +60,7 @@ from .epmc import TWO_PI, Epmc, make_problem
 from .epmc_condensed import EpmcCondensed
 from .fourier import Fourier
 from .nlmode_branch import POINT_ARRAYS, NlModeBranch
+from .nlmode_corrector import Snes
 from .system import System
 
 log = logging.getLogger(__name__)
@@ -73,134 +75,6 @@ __all__ = [
     "pick_mode",
     "slip_amplitude",
 ]
-
-
-# -- the corrector: PETSc SNES with the dense analytic Jacobian ------------------------
-class _Snes:
-    """Newton (SNES, backtracking line search, dense LU) on the bordered system.
-
-    Unknowns ``Y = [y / scale, s]`` with ``s = ln a``; equations
-    ``[r(y; e^s) * row_scale, c . (Y - Yp)]``: the constraint ``c`` is ``e_s``
-    for a point at a given amplitude, or the secant for a pseudo-arc-length
-    step (which passes a fold of the backbone in amplitude).
-    """
-
-    def __init__(
-        self, prob: Epmc, tol: float, tol_stall: float, max_it: int, line_search: str = "bt"
-    ):
-        from petsc4py import PETSc
-
-        self.prob = prob
-        N = prob.n_unknowns
-        n = N + 1
-        self.n = n
-        comm = PETSc.COMM_SELF
-        self.snes = PETSc.SNES().create(comm)
-        prefix = f"upd_epmc{id(self)}_"
-        self.snes.setOptionsPrefix(prefix)
-        po = PETSc.Options()
-        po[f"{prefix}snes_linesearch_type"] = line_search
-        self.F = PETSc.Vec().createSeq(n, comm=comm)
-        self.X = PETSc.Vec().createSeq(n, comm=comm)
-        self.J = PETSc.Mat().createDense((n, n), comm=comm)
-        self.J.setUp()
-        self.s = prob.var_scale()
-        self.rs = prob.row_scale()
-        self.c = np.zeros(n)
-        self.c[-1] = 1.0
-        self.c0 = 0.0
-        me = self
-
-        def function(snes, X, F):
-            Y = X.getArray(readonly=True)
-            r, _ = me.prob.residual(Y[:N] * me.s, float(np.exp(Y[N])))
-            out = F.getArray()
-            out[:N] = r * me.rs
-            out[N] = me.c @ Y - me.c0
-            if not np.all(np.isfinite(out)):
-                out[:] = np.inf
-
-        def jacobian(snes, X, A, P):
-            Y = X.getArray(readonly=True)
-            a = float(np.exp(Y[N]))
-            y = Y[:N] * me.s
-            r0, _, Jd = me.prob.residual(y, a, want_jac=True)
-            Jf = np.empty((n, n))
-            Jf[:N, :N] = (Jd * me.rs[:, None]) * me.s[None, :]
-            h = 1e-6  # d r / d ln a: one more residual (the contact term alone depends on a)
-            r1, _ = me.prob.residual(y, a * np.exp(h))
-            Jf[:N, N] = (r1 - r0) / h * me.rs
-            Jf[N] = me.c
-            A.setValues(range(n), range(n), Jf.ravel())  # row-major
-            A.assemble()
-
-        self.snes.setFunction(function, self.F)
-        self.snes.setJacobian(jacobian, self.J, self.J)
-        ksp = self.snes.getKSP()
-        ksp.setType("preonly")
-        ksp.getPC().setType("lu")
-        reasons = PETSc.SNES.ConvergedReason
-        hist: list[float] = []
-        self.ok = False
-
-        def converged(snes, it, norms):
-            F = snes.getFunction()[0].getArray(readonly=True)
-            X = snes.getSolution().getArray(readonly=True)
-            if not np.all(np.isfinite(F)):
-                return reasons.DIVERGED_FNORM_NAN
-            rn = float(np.abs(F[:N]).max())
-            scale = max(float(np.abs(X[: N - 2]).max()), 1.0)
-            if it == 0:
-                hist.clear()
-            hist.append(rn)
-            c_ok = abs(F[N]) <= 1e-9
-            if rn <= tol * scale and c_ok:
-                me.ok = True
-                return reasons.CONVERGED_FNORM_ABS
-            if len(hist) > 4 and hist[-1] > 0.5 * hist[-5] and rn <= tol_stall * scale and c_ok:
-                me.ok = True  # Newton stalls on a kink (stick/slip transition)
-                return reasons.CONVERGED_SNORM_RELATIVE
-            if it >= max_it:
-                return reasons.DIVERGED_MAX_IT
-            return reasons.ITERATING
-
-        self.snes.setConvergenceTest(converged)
-        self.snes.setTolerances(max_it=max_it + 1)
-        self.snes.setMaxLinearSolveFailures(10**6)
-        self.snes.setFromOptions()
-        del po[f"{prefix}snes_linesearch_type"]
-
-    def scaled(self, y: np.ndarray, s: float) -> np.ndarray:
-        return np.concatenate([y / self.s, [s]])
-
-    def unscaled(self, Y: np.ndarray) -> tuple[np.ndarray, float]:
-        return Y[:-1] * self.s, float(Y[-1])
-
-    def solve(
-        self, Y0: np.ndarray, c: np.ndarray | None = None, Yp: np.ndarray | None = None
-    ) -> tuple[np.ndarray, bool, int]:
-        """From ``Y0`` with the constraint ``c . (Y - Yp) = 0`` (default: ``s = Y0[-1]``)."""
-        if c is None:
-            self.c = np.zeros(self.n)
-            self.c[-1] = 1.0
-            self.c0 = float(Y0[-1])
-        else:
-            self.c = np.asarray(c, float)
-            self.c0 = float(self.c @ (Y0 if Yp is None else Yp))
-        self.X.getArray()[:] = Y0
-        self.ok = False
-        try:
-            self.snes.solve(None, self.X)
-        except Exception as e:  # noqa: BLE001 - a PETSc/numerical failure is a failed step
-            log.debug("EPMC corrector: %s", e)
-            return Y0, False, 0
-        Y = self.X.getArray(readonly=True).copy()
-        ok = bool(self.snes.getConvergedReason() > 0 and self.ok and np.all(np.isfinite(Y)))
-        return Y, ok, int(self.snes.getIterationNumber())
-
-    def destroy(self) -> None:
-        for o in (self.snes, self.F, self.X, self.J):
-            o.destroy()
 
 
 # -- choosing the mode and the amplitude range -------------------------------------------
@@ -269,6 +143,8 @@ def nonlinear_mode(
     space: str = "auto",
     levels: object = None,
     max_fold_points: int = 80,
+    plateau_points: int = 6,
+    jacobian_lag: int = 3,
     refine_ratio: float = 1.02,
     label: str = "",
 ) -> NlModeBranch:
@@ -288,7 +164,18 @@ def nonlinear_mode(
     ``a xi w`` exceeds twice the largest level's modal force
     ``|psi_1^H f1|``: every level's peak is then inside it. A fold that the
     amplitude does not pass again within ``max_fold_points`` points ends the
-    backbone (completed = False). With ``levels``, a point is then solved at
+    backbone (completed = False), and so does an amplitude that stays within
+    0.2 % over ``plateau_points`` points while the damping ratio rises by a
+    fifth (an amplitude limit, checked only with ``f1`` and ``levels``: the
+    levels still above it would all peak at that amplitude, where the
+    synthesis is not valid; 0 turns the check off). Below the first slip
+    every contact sticks and the mode is linear: one step crosses that range.
+    ``jacobian_lag``: the Jacobian (and its LU) is rebuilt every that many
+    Newton iterations, across points (a chord method between rebuilds: the
+    LU is most of an iteration's cost; the tolerance on the residual is the
+    same, so the points are as accurate); 1 rebuilds it at every iteration.
+    Where a point finds the damper out of contact, the step is halved until
+    the last point lies within 2 % in amplitude below it. With ``levels``, a point is then solved at
     each level's synthesised peak where the backbone's segment there spans
     more than ``refine_ratio`` in amplitude. Never raises for a failed solve:
     the branch says ``failed`` and keeps its points.
@@ -314,7 +201,10 @@ def nonlinear_mode(
     check_range("amplitude_range[1]", a1, a0, lo_open=True)
     n_steps = check_int("n_steps", n_steps, 1)
     rows: dict[str, list] = {k: [] for k in POINT_ARRAYS}
-    snes = _Snes(prob, tol, tol_stall, max_newton)
+    lag = check_int("jacobian_lag", jacobian_lag, 1)
+    # chord iterations converge linearly: more of them per point, same step control
+    its_scale = 1.0 if lag == 1 else 2.5
+    snes = Snes(prob, tol, tol_stall, round(max_newton * its_scale), lag=lag)
     message, failed, completed = "", False, False
     s0, s1 = np.log(a0), np.log(a1)
     phi1_ref = None
@@ -332,7 +222,7 @@ def nonlinear_mode(
         if phi1_ref is None:
             phi1_ref = pt["phi1"]
         if pt["lost"]:
-            raise _Stop(
+            raise _Lost(
                 f"the damper has lost contact at modal amplitude {a:.4g}: a singular "
                 "state; the backbone ends here",
                 False,
@@ -403,8 +293,10 @@ def nonlinear_mode(
                     Yn, ok, its = snes.solve(Yp, mw**2 * t, Yp)
                 else:  # the next amplitude, the secant extrapolated to it as predictor
                     dsn = ds * span
-                    if Y[-1] < s_slip - 1e-9 < Y[-1] + dsn:
-                        dsn = s_slip - Y[-1]  # a point just below the first slip (a kink)
+                    if Y[-1] < s_slip - 1e-9:
+                        # every contact sticks below the first slip: the mode is linear
+                        # there, so one step goes to the point just below it (a kink)
+                        dsn = s_slip - Y[-1]
                     Yp = Y + t * (dsn / t[-1]) if t[-1] > 1e-12 * span else Y.copy()
                     Yp[-1] = Y[-1] + dsn
                     Yn, ok, its = snes.solve(Yp)
@@ -470,15 +362,23 @@ def nonlinear_mode(
                             "does): it ends here",
                             False,
                         )
+                try:
+                    prev = record(snes.unscaled(Yn)[0], float(np.exp(Yn[-1])), its)
+                except _Lost:
+                    if Yn[-1] - Y[-1] > np.log(1.02) and ds > 2 * ds_min:
+                        ds *= 0.5  # close in on the loss of contact (the last point's
+                        continue  # amplitude bounds every level the synthesis can reach)
+                    raise
                 Y_prev, Y = Y, Yn
                 hist.append(Y)
-                prev = record(snes.unscaled(Y)[0], float(np.exp(Y[-1])), its)
+                if f_top > 0:  # only a backbone for given levels stops at a plateau
+                    _plateau(rows, plateau_points)
                 bar.n = round(min(max(Y[-1] - s0, 0.0), span), 6)
                 bar.set_postfix_str(
                     f"{prev['freq_hz']:.4g} Hz, D {prev['damping_ratio']:.3g}", refresh=False
                 )
                 bar.update(0)
-                grow = 1.5 if its <= 4 else (0.7 if its > 8 else 1.0)
+                grow = 1.5 if its <= 4 * its_scale else (0.7 if its > 8 * its_scale else 1.0)
                 ds = float(np.clip(ds * grow, ds_min, ds_max))
             completed = True
     except _Stop as stop:
@@ -555,6 +455,8 @@ def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) 
             except InputError:
                 return
             a = nm.amplitude
+            if np.min(np.abs(np.log(a / s.peak_modal_amplitude))) < 1e-3:
+                continue  # a point is already there (a repeated solve would duplicate it)
             j = int(np.searchsorted(a, s.peak_modal_amplitude))
             if not 0 < j < a.size or a[j] / a[j - 1] <= ratio or np.any(np.diff(a[: j + 1]) <= 0):
                 continue
@@ -584,7 +486,34 @@ def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) 
             return
 
 
+def _plateau(rows: dict[str, list], n: int) -> None:
+    """Stop where the amplitude has stalled over the last ``n`` points while damping grows.
+
+    Over ``n`` points within 0.2 % in modal amplitude while the damping ratio
+    rises by more than a fifth, the mode has met an amplitude limit (lift-off
+    or a stop): a larger force then raises the dissipation, not the
+    amplitude, which a single mode continued in amplitude cannot follow.
+    """
+    a, d = rows["amplitude"], rows["damping_ratio"]
+    if n < 2 or len(a) < n:
+        return
+    la = np.log(np.asarray(a[-n:], float))
+    d0, d1 = float(d[-n]), float(d[-1])
+    if la.max() - la.min() < 2e-3 and d1 > 1.2 * d0:
+        raise _Stop(
+            f"the modal amplitude stalls at {a[-1]:.4g} (within 0.2 % over {n} points) while "
+            f"the damping ratio rises from {d0:.3g} to {d1:.3g}: an amplitude limit (lift-off "
+            "or a stop), where a larger force raises the dissipation, not the amplitude; "
+            "the backbone ends here",
+            False,
+        )
+
+
 class _Stop(Exception):
     def __init__(self, message: str, failed: bool, completed: bool = False):
         super().__init__(message)
         self.failed, self.completed = failed, completed
+
+
+class _Lost(_Stop):
+    """The damper has lost every contact at the point just solved (not recorded)."""

@@ -146,7 +146,8 @@ def synthesize(
     linear_below = bool(nm.status.size == 0 or not np.any(nm.status[0]))
     if hit.size == 0:
         j, th = nm.n_points - 1, 1.0
-        reasons.append("the peak lies beyond the largest amplitude of the backbone")
+        why = "" if nm.completed or not nm.message else f" (the backbone: {nm.message})"
+        reasons.append(f"the peak lies beyond the largest amplitude of the backbone{why}")
     elif hit[0] == 0:
         # below the first point: linear if every contact sticks there (g and the outputs
         # are proportional to a), else out of reach
