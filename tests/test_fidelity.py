@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import csv
 import itertools
 import json
 import math
 import random
 
+import numpy as np
 import pytest
 
 from tests.conftest import ROOT, assert_nonblank, run_upd
@@ -405,3 +407,62 @@ def test_real_fidelity_study(tmp_path):
         assert "NO setting meets" in p["reason"]
     for f in ("fidelity_pareto.png", "fidelity_mesh-size.png", "fidelity_nt.png"):
         assert_nonblank(tmp_path / "fid" / "figures" / f)
+
+
+# ---- the nonlinear-mode synthesis entry -------------------------------------------------------
+
+TINY_NLM = """
+name = "tiny_nlm"
+kind = "fidelity"
+dampers = ["cone"]
+phases = [0.0]
+forces = [15.0]
+mesh-size = 14.0
+stability = false
+harmonics = [0, 1, 2, 3]
+nt = 32
+knobs = ["nt"]
+levels-nt = [32, 64]
+nonlinear-modes = true
+"""
+
+
+@pytest.mark.slow
+def test_fidelity_nonlinear_mode_entry(tmp_path):
+    """With nonlinear-modes on, the ladder gets the synthesis as one more setting: its
+    error is the synthesised peak against the reference setting's HBM peak (recomputed
+    here from the cached backbone), within 2 % where the synthesis calls itself valid,
+    and its time is the base model's plus the backbone's."""
+    from workbench.hbm.nlmodes import NlModeBranch
+    from workbench.hbm.synthesis import synthesize
+    from workbench.studies.fidelity import run_fidelity
+    from workbench.studies.spec import load_study
+
+    (tmp_path / "tiny_nlm.toml").write_text(TINY_NLM)
+    spec = load_study(tmp_path / "tiny_nlm.toml", {"tolerance": "3%"})
+    out = tmp_path / "out"
+    s = run_fidelity(spec, out)
+    rows = _by_label(s)
+    nlm = rows["nonlinear-mode synthesis"]
+    assert nlm["role"] == "nlmode" and nlm["failed"] == ""
+    base, ref = rows["base"], rows["reference"]
+    # the model is the base setting's: same geometry and reduction charged
+    assert (nlm["geometry_s"], nlm["reduction_s"]) == (base["geometry_s"], base["reduction_s"])
+    assert nlm["hbm_s"] > 0
+    # the error, recomputed from the cached backbone and the reference's peak
+    (h5,) = (out / "cache" / "nlmodes").glob("*.h5")
+    nm = NlModeBranch.load(h5)
+    with np.load(h5.with_suffix(".npz")) as z:
+        f1, band = z["f1"], tuple(float(v) for v in z["band"])
+    syn = synthesize(nm, f1, 15.0, 0, band)
+    assert ref["err_peak_amplitude_mm_pct"] == 0.0
+    with open(out / "tables" / "fidelity_cases.csv", newline="") as fh:
+        (ref_row,) = [r for r in csv.DictReader(fh) if r["role"] == "reference"]
+    ref_peak = float(ref_row["peak_amplitude_mm"])
+    err = nlm["err_peak_amplitude_mm_pct"]
+    # the table keeps 4 significant digits: the recomputed error within 0.02 points
+    assert err == pytest.approx(abs(syn.peak_amplitude * 1e3 / ref_peak - 1) * 100, abs=0.02)
+    if syn.valid:
+        assert err < 2.0
+    else:
+        assert "not valid" in nlm["knobs"]
