@@ -62,7 +62,9 @@ class Snes:
 
         def function(snes, X, F):
             Y = X.getArray(readonly=True)
-            r, _ = me.prob.residual(Y[:N] * me.s, float(np.exp(Y[N])))
+            # a line-search trial far off (overflow, NaN) is a failed trial, said by inf
+            with np.errstate(over="ignore", invalid="ignore"):
+                r, _ = me.prob.residual(Y[:N] * me.s, float(np.exp(Y[N])))
             out = F.getArray()
             out[:N] = r * me.rs
             out[N] = me.c @ Y - me.c0
