@@ -78,3 +78,23 @@ def test_no_module_is_over_600_lines():
         if (n := len(p.read_text().splitlines())) > MAX_LINES
     }
     assert not long, f"modules over {MAX_LINES} lines (split them by concept): {long}"
+
+
+def test_nonlinear_mode_sources_do_not_key_the_forced_responses():
+    """Every nonlinear-mode module of hbm/ is left out of the forced-response cache key
+    (an edit to the backbone code must not recompute a study's cases), and none of the
+    modules that do key it imports one of them."""
+    import ast
+
+    from workbench.studies.plan import NLMODE_SOURCES
+
+    hbm = PKG / "hbm"
+    names = {p.name for p in hbm.glob("*.py")}
+    nl = {n for n in names if n.startswith(("nlmode", "epmc")) or n == "synthesis.py"}
+    assert nl == set(NLMODE_SOURCES)
+    stems = {n[:-3] for n in nl}
+    for n in sorted(names - nl):
+        tree = ast.parse((hbm / n).read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 1:
+                assert node.module.split(".")[0] not in stems, (n, node.module)

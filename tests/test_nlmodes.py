@@ -296,3 +296,34 @@ def test_stuck_range_is_one_step():
     # the stuck mode's frequency holds across the step (to 0.1 %: the preload's mean
     # part moves the first slip a little from the linear estimate, where it is solved)
     assert b.freq_hz[1] == pytest.approx(b.freq_hz[0], rel=1e-3)
+
+
+def test_synthesised_flanks_sampled_across_the_stuck_range():
+    """The continuation crosses the stuck range in one step; the synthesised curve still
+    samples its flanks there (the mode is linear: fixed frequency and rates, output
+    proportional to amplitude), and those samples are the stuck oscillator's exact
+    receptance (Jenkins oscillator, one DOF: the single-mode theory is exact while it
+    sticks)."""
+    ex = sdof_jenkins()
+    sysm = ex.system
+    H = (0, 1, 3)
+    b = nonlinear_mode(sysm, f1=ex.f1, harmonics=H, outputs=ex.outputs, levels=ex.levels)
+    stuck_rows = ~np.any(b.status > 0, axis=1)
+    y_stuck = b.out_amp[stuck_rows, 0].max()
+    assert stuck_rows.sum() <= 3  # the stuck range is one or two steps of the backbone
+    Ks, M, C = sysm.regularised_stiffness(), sysm.M, sysm.damping_matrix()
+    checked = 0
+    for lv in ex.levels:
+        s = synthesize(b, ex.f1, lv, 0)
+        on = s.out_amp < 0.999 * y_stuck
+        if s.peak_amplitude > y_stuck:  # the peak is past the first slip: flanks are stuck
+            assert on.sum() >= 20
+        for side in (s.freq_hz < s.peak_freq_hz, s.freq_hz > s.peak_freq_hz):
+            yy = s.out_amp[side & on]
+            if yy.size > 1:  # no jump along a stuck flank (it was one straight segment)
+                assert np.max(yy[1:] / yy[:-1]) < 1.3 and np.min(yy[1:] / yy[:-1]) > 1 / 1.3
+        Wr = 2 * np.pi * s.freq_hz[on]
+        exact = [abs(np.linalg.solve(Ks - W**2 * M + 1j * W * C, lv * ex.f1)[0]) for W in Wr]
+        np.testing.assert_allclose(s.out_amp[on], exact, rtol=1e-6)
+        checked += int(on.sum())
+    assert checked > 40

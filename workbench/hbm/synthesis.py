@@ -73,6 +73,31 @@ class Synthesis:
         )
 
 
+FLANK_SAMPLES = 24  # curve samples across a stuck (linear) segment of the backbone
+
+
+def _sides(w: float, xi: float, c: float, F: float, a: float) -> tuple[float, float]:
+    """(left, right) excitation frequencies W (rad/s) at which the response has modal
+    amplitude ``a``: the real roots W > 0 of
+    W^4 + (c^2 - 2 w^2) W^2 + 2 c (xi - c) w W + w^4 + (xi - c)^2 w^2 - F^2 / a^2 = 0
+    (nan where a side does not exist: above the peak both are nan)."""
+    r = np.roots(
+        [
+            1.0,
+            0.0,
+            c**2 - 2 * w**2,
+            2 * c * (xi - c) * w,
+            w**4 + (xi - c) ** 2 * w**2 - F**2 / a**2,
+        ]
+    )
+    r = np.sort(r[(np.abs(r.imag) <= 1e-9 * w) & (r.real > 0)].real)
+    if r.size >= 2:
+        return float(r[0]), float(r[-1])
+    if r.size == 1:
+        return float("nan"), float(r[0])
+    return float("nan"), float("nan")
+
+
 def _least_stiffness(w: np.ndarray, xi: np.ndarray, c: np.ndarray):
     """(W, h) with h the least over W of (w^2 - W^2)^2 + (xi w + c (W - w))^2 (Newton)."""
     W = w.copy()
@@ -123,20 +148,7 @@ def synthesize(
     lo_f = np.full(a.size, np.nan)
     hi_f = np.full(a.size, np.nan)
     for i in range(a.size):
-        r = np.roots(
-            [
-                1.0,
-                0.0,
-                c[i] ** 2 - 2 * w[i] ** 2,
-                2 * c[i] * (xi[i] - c[i]) * w[i],
-                w[i] ** 4 + (xi[i] - c[i]) ** 2 * w[i] ** 2 - F[i] ** 2 / a[i] ** 2,
-            ]
-        )
-        r = np.sort(r[(np.abs(r.imag) <= 1e-9 * w[i]) & (r.real > 0)].real)
-        if r.size >= 2:
-            lo_f[i], hi_f[i] = r[0], r[-1]
-        elif r.size == 1:
-            hi_f[i] = r[0]
+        lo_f[i], hi_f[i] = _sides(w[i], xi[i], c[i], F[i], a[i])
     # the peak: the first amplitude where the least of |modal dynamic stiffness| a over W
     # reaches the modal force
     W, h_min = _least_stiffness(w, xi, c)
@@ -220,11 +232,32 @@ def synthesize(
     w_pk = at(w)
     xi_pk = at(xi)
     f_pk = at(W) / TWO_PI
+
     # the curve: both sides of the main branch (the backbone below the peak) and the peak
-    main = np.arange(a.size) < j
-    left, right = main & np.isfinite(lo_f), main & np.isfinite(hi_f)
-    curve_f = np.concatenate([lo_f[left] / TWO_PI, [f_pk], hi_f[right][::-1] / TWO_PI])
-    curve_y = np.concatenate([y[left], [y_pk], y[right][::-1]])
+    # (where every contact sticks at both ends of a segment the mode is linear and the
+    # continuation crosses it in one step: the flanks are sampled there at fixed w, xi, c
+    # with the output proportional to a)
+    def stuck_pair(i0: int, i1: int) -> bool:
+        return nm.status.size == 0 or not (np.any(nm.status[i0]) or np.any(nm.status[i1]))
+
+    pts: list[tuple[float, float, float]] = []  # (left W, right W, output)
+
+    def fill(i0: int, a1: float) -> None:
+        for s_ in np.geomspace(a[i0], a1, FLANK_SAMPLES)[1:-1]:
+            lo, hi = _sides(w[i0], xi[i0], c[i0], F[i0], s_)
+            pts.append((lo, hi, y[i0] * s_ / a[i0]))
+
+    idx = np.flatnonzero(np.arange(a.size) < j)
+    for k, i in enumerate(idx):
+        if k and stuck_pair(idx[k - 1], i):
+            fill(int(idx[k - 1]), a[i])
+        pts.append((lo_f[i], hi_f[i], y[i]))
+    if idx.size and th >= 0 and stuck:
+        fill(int(idx[-1]), a_pk)
+    P = np.array(pts, float).reshape(-1, 3)
+    left, right = np.isfinite(P[:, 0]), np.isfinite(P[:, 1])
+    curve_f = np.concatenate([P[left, 0] / TWO_PI, [f_pk], P[right, 1][::-1] / TWO_PI])
+    curve_y = np.concatenate([P[left, 2], [y_pk], P[right, 2][::-1]])
     if band_hz is not None:
         keep = (curve_f >= band_hz[0]) & (curve_f <= band_hz[1])
         curve_f, curve_y = curve_f[keep], curve_y[keep]

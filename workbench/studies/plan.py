@@ -80,7 +80,14 @@ class Case:
         }
 
 
-NLMODE_SOURCES = ("nlmodes.py", "epmc.py", "epmc_condensed.py", "nlmode_branch.py", "synthesis.py")
+NLMODE_SOURCES = (
+    "nlmodes.py",
+    "nlmode_corrector.py",
+    "epmc.py",
+    "epmc_condensed.py",
+    "nlmode_branch.py",
+    "synthesis.py",
+)
 
 
 def solver_code_version() -> str:
