@@ -73,7 +73,7 @@ class Synthesis:
         )
 
 
-FLANK_SAMPLES = 24  # curve samples across a stuck (linear) segment of the backbone
+FLANK_RATIO = 1.05  # the curve's largest amplitude step between backbone points
 
 
 def _sides(w: float, xi: float, c: float, F: float, a: float) -> tuple[float, float]:
@@ -234,26 +234,33 @@ def synthesize(
     f_pk = at(W) / TWO_PI
 
     # the curve: both sides of the main branch (the backbone below the peak) and the peak
-    # (where every contact sticks at both ends of a segment the mode is linear and the
-    # continuation crosses it in one step: the flanks are sampled there at fixed w, xi, c
-    # with the output proportional to a)
-    def stuck_pair(i0: int, i1: int) -> bool:
-        return nm.status.size == 0 or not (np.any(nm.status[i0]) or np.any(nm.status[i1]))
-
+    # (between backbone points further apart than FLANK_RATIO in amplitude, e.g. across
+    # the stuck range, which the continuation crosses in one step, the flanks are sampled
+    # with w, xi, c and the modal force linear in ln a and the output per unit amplitude
+    # log-linear: exact where the mode is linear, the backbone's own interpolation elsewhere)
     pts: list[tuple[float, float, float]] = []  # (left W, right W, output)
 
-    def fill(i0: int, a1: float) -> None:
-        for s_ in np.geomspace(a[i0], a1, FLANK_SAMPLES)[1:-1]:
-            lo, hi = _sides(w[i0], xi[i0], c[i0], F[i0], s_)
-            pts.append((lo, hi, y[i0] * s_ / a[i0]))
+    def fill(i0: int, i1: int, a_end: float) -> None:
+        if not a_end > FLANK_RATIO * a[i0] or not a[i1] > a[i0]:
+            return
+        n = int(np.ceil(np.log(a_end / a[i0]) / np.log(FLANK_RATIO)))
+        r0, r1 = (np.log(max(y[i], 1e-300) / a[i]) for i in (i0, i1))
+        for s_ in np.geomspace(a[i0], a_end, n + 1)[1:-1]:
+            t = np.log(s_ / a[i0]) / np.log(a[i1] / a[i0])
+
+            def lin(v: np.ndarray, t: float = t) -> float:
+                return float(v[i0] + t * (v[i1] - v[i0]))
+
+            lo, hi = _sides(lin(w), lin(xi), lin(c), lin(F), s_)
+            pts.append((lo, hi, s_ * float(np.exp(r0 + t * (r1 - r0)))))
 
     idx = np.flatnonzero(np.arange(a.size) < j)
     for k, i in enumerate(idx):
-        if k and stuck_pair(idx[k - 1], i):
-            fill(int(idx[k - 1]), a[i])
+        if k:
+            fill(int(idx[k - 1]), int(i), a[i])
         pts.append((lo_f[i], hi_f[i], y[i]))
-    if idx.size and th >= 0 and stuck:
-        fill(int(idx[-1]), a_pk)
+    if idx.size and th >= 0 and j < a.size:
+        fill(j - 1, j, a_pk)
     P = np.array(pts, float).reshape(-1, 3)
     left, right = np.isfinite(P[:, 0]), np.isfinite(P[:, 1])
     curve_f = np.concatenate([P[left, 0] / TWO_PI, [f_pk], P[right, 1][::-1] / TWO_PI])
