@@ -189,13 +189,12 @@ def nonlinear_mode(
     if len(names) != O.shape[0]:
         raise InputError("output_names", list(names), f"{O.shape[0]} names (one per output)")
     prob = make_problem(system, fourier, mode, O, dc_anchor, space)
+    a_slip = slip_amplitude(system, mode)
     if amplitude_range is None:
-        a_slip = slip_amplitude(system, mode)
         lo, hi = (float(v) for v in relative_range)
         check_range("relative_range[0]", lo, 0.0, lo_open=True)
         check_range("relative_range[1]", hi, lo, lo_open=True)
         amplitude_range = (lo * a_slip, hi * a_slip)
-    a_slip = slip_amplitude(system, mode)
     a0, a1 = (float(v) for v in amplitude_range)
     check_range("amplitude_range[0]", a0, 0.0, lo_open=True)
     check_range("amplitude_range[1]", a1, a0, lo_open=True)
