@@ -20,7 +20,7 @@ from workbench.contact import ContactElements
 from workbench.hbm import SolverOptions, System, frequency_response
 from workbench.hbm.examples import sdof_jenkins, two_dof_contact
 from workbench.hbm.fourier import Fourier
-from workbench.hbm.nlmodes import Epmc, NlModeBranch, nonlinear_mode
+from workbench.hbm.nlmodes import Epmc, EpmcCondensed, NlModeBranch, nonlinear_mode
 from workbench.hbm.synthesis import synthesize
 
 
@@ -257,10 +257,12 @@ def test_plateau_rule():
     _plateau(level, 6)  # the damping does not rise by a fifth
 
 
-def test_chord_newton_lands_on_the_same_points():
-    """The chord iterations (Jacobian rebuilt every 3rd iteration, the default) and full
-    Newton give the same synthesised peaks (solved points, tolerance 1e-10) where valid;
-    a level beyond an unfinished backbone's end is flagged with the backbone's reason."""
+def test_chord_and_krylov_newton_land_on_the_same_points():
+    """Full Newton (dense LU at every iteration), the chord iterations (dense LU every 3rd)
+    and Newton-Krylov (GMRES on the exact Jacobian with a lagged LU preconditioner, the
+    default on condensed problems) give the same synthesised peaks (solved points,
+    tolerance 1e-10) where valid, the Krylov one with fewer factorisations; a level beyond
+    an unfinished backbone's end is flagged with the backbone's reason."""
     from workbench.hbm.examples import line_damper_rig
 
     ex = line_damper_rig(n_per_line=3, family="out-of-phase", k_line_n_per_m2=5e8, mu=0.5)
@@ -268,19 +270,62 @@ def test_chord_newton_lands_on_the_same_points():
         f1=ex.f1, band_hz=ex.band_hz, harmonics=(0, 1, 3), outputs=ex.outputs, max_fold_points=20
     )
     levels = (0.096, 3.84, 30.0)
-    runs = {lag: nonlinear_mode(ex.system, levels=levels, jacobian_lag=lag, **kw) for lag in (1, 3)}
-    syn = {
-        lag: [synthesize(b, ex.f1, lv, 0, ex.band_hz) for lv in levels] for lag, b in runs.items()
+    setups = {"full": ("dense", 1), "chord": ("dense", 3), "krylov": ("auto", 3)}
+    runs = {
+        k: nonlinear_mode(ex.system, levels=levels, linear=lin, jacobian_lag=lag, **kw)
+        for k, (lin, lag) in setups.items()
     }
-    for a, b in zip(syn[1][:2], syn[3][:2], strict=True):
-        assert a.valid and b.valid
-        assert b.peak_amplitude == pytest.approx(a.peak_amplitude, rel=1e-6)
-        assert b.peak_freq_hz == pytest.approx(a.peak_freq_hz, rel=1e-6)
-    for lag, b in runs.items():
+    syn = {k: [synthesize(b, ex.f1, lv, 0, ex.band_hz) for lv in levels] for k, b in runs.items()}
+    for k in ("chord", "krylov"):
+        for a, b in zip(syn["full"][:2], syn[k][:2], strict=True):
+            assert a.valid and b.valid
+            assert b.peak_amplitude == pytest.approx(a.peak_amplitude, rel=1e-6)
+            assert b.peak_freq_hz == pytest.approx(a.peak_freq_hz, rel=1e-6)
+    fact = {k: b.timings["factorisations"] for k, b in runs.items()}
+    assert fact["krylov"] < fact["chord"] < fact["full"], fact
+    assert runs["krylov"].timings["krylov_its"] > 0 and runs["full"].timings["krylov_its"] == 0
+    for k, b in runs.items():
         assert not b.failed, b.message
-        top = syn[lag][-1]
+        top = syn[k][-1]
         if not b.completed and not top.valid:  # ended before the largest level's peak
             assert b.message in " ".join(top.reasons)
+
+
+def test_condensed_tangent_operator():
+    """The condensed problem's Jacobian operator: its products equal the dense matrix, and
+    both equal central differences of the residual, the ``ln a`` column included (exact:
+    ``d(G/a)/d ln a = D X - G/a``) at a state with stick-slip and partial lift-off."""
+    from workbench.hbm.examples import line_damper_rig
+    from workbench.hbm.nlmodes import pick_mode, slip_amplitude
+
+    ex = line_damper_rig(n_per_line=3, family="out-of-phase", k_line_n_per_m2=5e8, mu=0.5)
+    mode = pick_mode(ex.system, ex.f1, ex.band_hz)
+    p = EpmcCondensed(ex.system, Fourier((0, 1, 3)), mode, ex.outputs)
+    a = 3.0 * slip_amplitude(ex.system, mode)
+    y = p.linear_guess()
+    y = y + 1e-2 * np.random.default_rng(0).standard_normal(y.size) * np.abs(y).max()
+    _, res, T = p.tangent(y, a)
+    st = np.asarray(res.status).ravel()
+    # stick-slip (1) and partial separation (2): the contact Jacobian is not trivial
+    assert np.any(st == 1) and np.all((st == 1) | (st == 2))
+    J = T.dense()
+    assert J.shape == (y.size, y.size + 1)
+    v = np.random.default_rng(1).standard_normal(y.size + 1)
+    assert np.abs(T.matvec(v) - J @ v).max() < 1e-12 * np.abs(J @ v).max()
+    Jf = np.empty_like(J)
+    for j in range(y.size + 1):
+        if j < y.size:
+            h = 1e-7 * max(abs(y[j]), 1e-3)
+            yp, ym = y.copy(), y.copy()
+            yp[j] += h
+            ym[j] -= h
+            Jf[:, j] = (p.residual(yp, a)[0] - p.residual(ym, a)[0]) / (2 * h)
+        else:  # ln a, with a step where rounding and curvature balance
+            h = 1e-5
+            rp, rm = p.residual(y, a * np.exp(h))[0], p.residual(y, a * np.exp(-h))[0]
+            Jf[:, j] = (rp - rm) / (2 * h)
+    assert np.abs(J - Jf).max() < 1e-6 * np.abs(J).max()
+    assert np.abs(J[:, -1] - Jf[:, -1]).max() < 1e-6 * np.abs(Jf[:, -1]).max()
 
 
 def test_stuck_range_is_one_step():

@@ -139,10 +139,12 @@ class EpmcCondensed:
         G, D, res = self.phys.contact_local(U, want_jac)
         return G[:, self.act] / a, D, res
 
-    def residual(self, y: np.ndarray, a: float, want_jac: bool = False):
+    def residual(self, y: np.ndarray, a: float, want_jac: bool | str = False):
+        """The point's residual (and with ``want_jac`` its Jacobian in ``y``; "operator":
+        :class:`CondensedTangent` in ``[y, ln a]``)."""
         f = self.fourier
         X, eta, w, xi = self._split(y)
-        Ga, D, res = self._contact(X, a, want_jac)  # (nh, n_s) per unit a
+        Ga, D, res = self._contact(X, a, bool(want_jac))  # (nh, n_s) per unit a
         Fm = self.pm / a - Ga @ self.Bs  # (nh, n_m) modal force per unit a
         d, dd_w, dd_xi = self._coef(w, xi)
         z = self._apply(d, Fm)  # other modes
@@ -164,54 +166,15 @@ class EpmcCondensed:
         if not want_jac:
             return r, res
         self.stats["n_jacobian"] += 1
-        nh, n_s, Ns, N = self.nh, self.n_s, self.Ns, self.N
-        J = np.zeros((N + 2, N + 2))
-        # dr_u/dX = I + R D,  R = blocks of Bs H'_k Bs^T (real form)
-        Dact = self._dact(D)  # sparse (Ns, Ns): dG_act / dX (per unit a: the same)
-        R = np.zeros((Ns, Ns))
-        for i, kk in enumerate(f.harmonics):
-            Rk = (self.Bs * d[i]) @ self.Bs.T
-            if kk == 0:
-                R[:n_s, :n_s] = Rk.real
-            else:
-                c = f.index(kk, "c")
-                rc, rs = slice(c * n_s, (c + 1) * n_s), slice((c + 1) * n_s, (c + 2) * n_s)
-                R[rc, rc] = Rk.real
-                R[rc, rs] = Rk.imag
-                R[rs, rc] = -Rk.imag
-                R[rs, rs] = Rk.real
-        J[:Ns, :Ns] = np.asarray((Dact.T @ R.T).T)
-        J[np.arange(Ns), np.arange(Ns)] += 1.0
-        # dr_u/deta = -b_j in each component
-        for q, h in enumerate(self.keep_eta):
-            J[h * n_s : (h + 1) * n_s, Ns + q] = -self.bj
-        # d/dw, d/dxi of r_u through H'
-        J[:Ns, N] = -(self._apply(dd_w, Fm) @ self.Bs.T).ravel()
-        J[:Ns, N + 1] = -(self._apply(dd_xi, Fm) @ self.Bs.T).ravel()
-        # the followed mode's rows: -dFm_j/dX = b_j^T dG/dX
-        bD = np.asarray((Dact.T @ np.kron(np.eye(nh), self.bj[None, :]).T).T)  # (nh, Ns)
-        Je = np.zeros((nh, N + 2))
-        Je[:, :Ns] = bD
-        Ee = np.zeros((nh, nh))  # d re / d eta
-        dw = np.zeros(nh)
-        dxi = np.zeros(nh)
-        if f.has_dc:
-            Ee[0, 0] = w2
-        for k, c, s_ in f.pairs():
-            A = w2 - (k * w) ** 2
-            Bk = k * w * (cj - xi)
-            Ee[c, c], Ee[c, s_] = A, Bk
-            Ee[s_, c], Ee[s_, s_] = -Bk, A
-            dA, dB = -2 * k * k * w, k * (cj - xi)
-            dw[c] = dA * eta[c] + dB * eta[s_]
-            dw[s_] = dA * eta[s_] - dB * eta[c]
-            dxi[c] = -k * w * eta[s_]
-            dxi[s_] = k * w * eta[c]
-        Je[:, Ns:N] = Ee[:, self.keep_eta]
-        Je[:, N] = dw
-        Je[:, N + 1] = dxi
-        J[Ns : N + 2] = Je / w2
-        return r, res, J
+        T = CondensedTangent(self, X, eta, w, xi, a, Ga, self._dact(D), Fm, d, dd_w, dd_xi)
+        if want_jac == "operator":
+            return r, res, T
+        return r, res, T.dense()[:, : self.N + 2]
+
+    def tangent(self, y: np.ndarray, a: float):
+        """``(r, res, T)``: the residual and its Jacobian in ``[y, ln a]`` as an operator
+        (:class:`CondensedTangent`: products without forming it, or the dense matrix)."""
+        return self.residual(y, a, want_jac="operator")
 
     def _dact(self, D) -> sp.csr_matrix:
         """The contact Jacobian on the active unknowns (Ns, Ns), from the full sparse one."""
@@ -242,3 +205,85 @@ class EpmcCondensed:
 
     def point(self, y: np.ndarray, a: float, phi1_ref):
         return self.phys.point(y, a, phi1_ref)
+
+
+class CondensedTangent:
+    """The Jacobian of :meth:`EpmcCondensed.residual` in ``[y, ln a]`` at one point.
+
+    The contact block is ``I + R D``: ``D`` the contact Jacobian on the active
+    coordinates (sparse, element blocks coupling the harmonics) and ``R`` the
+    receptance of the other modes, ``R g = (d_k (g B_s)) B_s^T`` per harmonic
+    (diagonal in the modes). :meth:`matvec` applies it with those products
+    (a few ``n_s x n_m`` products per harmonic); :meth:`dense` forms it, one
+    harmonic block of ``R`` at a time (``R`` couples no harmonics), for a
+    factorisation. The ``ln a`` column is exact: ``d(G/a)/d ln a = D X - G/a``.
+    """
+
+    def __init__(self, p: EpmcCondensed, X, eta, w, xi, a, Ga, Dact, Fm, d, dd_w, dd_xi):
+        f = p.fourier
+        nh, n_s, Ns, N = p.nh, p.n_s, p.Ns, p.N
+        self.p, self.Dact, self.d = p, Dact, d
+        self.w2 = w2 = p.w_lin**2
+        j, cj = p.mode, p.cm[p.mode]
+        Bs = p.Bs
+        nk = p.keep_eta.size
+        # the columns of eta (kept components), w, xi and ln a, for the contact rows ...
+        U = np.zeros((Ns, nk + 3))
+        for q, h in enumerate(p.keep_eta):
+            U[h * n_s : (h + 1) * n_s, q] = -p.bj
+        U[:, nk] = -(p._apply(dd_w, Fm) @ Bs.T).ravel()
+        U[:, nk + 1] = -(p._apply(dd_xi, Fm) @ Bs.T).ravel()
+        dGa = (Dact @ X.ravel()).reshape(nh, n_s) - Ga  # d(G/a)/d ln a
+        dFm = -p.pm / a - dGa @ Bs
+        U[:, nk + 2] = -(p._apply(d, dFm) @ Bs.T).ravel()
+        # ... and for the followed mode's rows (divided by w_j^2)
+        Ee = np.zeros((nh, nh))
+        dw, dxi = np.zeros(nh), np.zeros(nh)
+        if f.has_dc:
+            Ee[0, 0] = w2
+        for k, c, s_ in f.pairs():
+            A = w2 - (k * w) ** 2
+            Bk = k * w * (cj - xi)
+            Ee[c, c], Ee[c, s_] = A, Bk
+            Ee[s_, c], Ee[s_, s_] = -Bk, A
+            dA, dB = -2 * k * k * w, k * (cj - xi)
+            dw[c] = dA * eta[c] + dB * eta[s_]
+            dw[s_] = dA * eta[s_] - dB * eta[c]
+            dxi[c] = -k * w * eta[s_]
+            dxi[s_] = k * w * eta[c]
+        E = np.zeros((nh, nk + 3))
+        E[:, :nk] = Ee[:, p.keep_eta]
+        E[:, nk], E[:, nk + 1], E[:, nk + 2] = dw, dxi, -dFm[:, j]
+        self.U, self.E = U, E / w2
+        self.shape = (N + 2, N + 3)
+
+    def matvec(self, v: np.ndarray) -> np.ndarray:
+        """``J v`` for ``v`` over ``[y, ln a]``."""
+        p = self.p
+        Ns = p.Ns
+        vo = v[Ns:]
+        g = (self.Dact @ v[:Ns]).reshape(p.nh, p.n_s)
+        ru = v[:Ns] + (p._apply(self.d, g @ p.Bs) @ p.Bs.T).ravel() + self.U @ vo
+        re = (g @ p.bj) / self.w2 + self.E @ vo
+        return np.concatenate([ru, re])
+
+    def dense(self) -> np.ndarray:
+        """The Jacobian as a dense ``(N + 2, N + 3)`` array."""
+        p, f = self.p, self.p.fourier
+        n_s, Ns = p.n_s, p.Ns
+        J = np.zeros(self.shape)
+        Dr = self.Dact.tocsr()
+        for i, kk in enumerate(f.harmonics):
+            Rk = (p.Bs * self.d[i]) @ p.Bs.T
+            if kk == 0:
+                R, rows = Rk.real, slice(0, n_s)
+            else:
+                c = f.index(kk, "c")
+                R = np.block([[Rk.real, Rk.imag], [-Rk.imag, Rk.real]])
+                rows = slice(c * n_s, (c + 2) * n_s)
+            J[rows, :Ns] = (Dr[rows].T @ R.T).T  # R (dense) times the rows of D (sparse)
+        J[np.arange(Ns), np.arange(Ns)] += 1.0
+        J[:Ns, Ns:] = self.U
+        J[Ns:, :Ns] = (Dr.T @ np.kron(np.eye(p.nh), p.bj[:, None])).T / self.w2
+        J[Ns:, Ns:] = self.E
+        return J

@@ -145,6 +145,7 @@ def nonlinear_mode(
     max_fold_points: int = 80,
     plateau_points: int = 6,
     jacobian_lag: int = 3,
+    linear: str = "auto",
     refine_ratio: float = 1.02,
     label: str = "",
 ) -> NlModeBranch:
@@ -174,6 +175,11 @@ def nonlinear_mode(
     Newton iterations, across points (a chord method between rebuilds: the
     LU is most of an iteration's cost; the tolerance on the residual is the
     same, so the points are as accurate); 1 rebuilds it at every iteration.
+    ``linear``: "krylov" (the default where the problem is condensed on the
+    contacts, :class:`EpmcCondensed`) solves each Newton step by GMRES on the
+    exact Jacobian, preconditioned by the LU of an earlier one (refactorised
+    only when GMRES struggles; ``jacobian_lag`` is then unused); "dense" the
+    LU of the Jacobian itself (:mod:`.nlmode_corrector`).
     Where a point finds the damper out of contact, the step is halved until
     the last point lies within 2 % in amplitude below it. With ``levels``, a point is then solved at
     each level's synthesised peak where the backbone's segment there spans
@@ -201,9 +207,10 @@ def nonlinear_mode(
     n_steps = check_int("n_steps", n_steps, 1)
     rows: dict[str, list] = {k: [] for k in POINT_ARRAYS}
     lag = check_int("jacobian_lag", jacobian_lag, 1)
+    snes = Snes(prob, tol, tol_stall, max_newton, lag=lag, linear=linear)
     # chord iterations converge linearly: more of them per point, same step control
-    its_scale = 1.0 if lag == 1 else 2.5
-    snes = Snes(prob, tol, tol_stall, round(max_newton * its_scale), lag=lag)
+    its_scale = 1.0 if lag == 1 or snes.linear == "krylov" else 2.5
+    snes.set_max_it(round(max_newton * its_scale))
     message, failed, completed = "", False, False
     s0, s1 = np.log(a0), np.log(a1)
     phi1_ref = None
@@ -403,7 +410,12 @@ def nonlinear_mode(
             arr[k] = np.array(v) if v else np.zeros(shapes.get(k, (0,)))
         arr["status"] = arr["status"].astype(np.int8)
         arr["newton_its"] = arr["newton_its"].astype(int)
-        timings = dict(total=time.perf_counter() - t_start, aft=prob.stats["t_aft"])
+        timings = dict(
+            total=time.perf_counter() - t_start,
+            aft=prob.stats["t_aft"],
+            factorisations=snes.n_factor,
+            krylov_its=snes.n_krylov,
+        )
         return NlModeBranch(
             mode=mode,
             f_stuck_hz=prob.w_lin / TWO_PI,
