@@ -124,6 +124,22 @@ def test_sobol_indices_of_ishigami_come_out_right():
     assert ind["S1"] == pytest.approx(ISHIGAMI_S1, abs=0.03)
     assert ind["ST"] == pytest.approx(ISHIGAMI_ST, abs=0.03)
     assert U.driver(ind) == "x1"
+    ver = U.driver_verdict(ind)  # x1 0.558 against x2 0.442: told apart at this N
+    assert ver["resolved"] and ver["contenders"] == [] and ver["negligible"] == []
+    # at N = 8 the half-widths (0.3-1) swallow the 0.12 gap: x2 is a contender
+    small = U.make_design(dists, 8, seed=11)
+    xs = small.values
+    ys = np.sin(xs[:, 0]) + 7.0 * np.sin(xs[:, 1]) ** 2 + 0.1 * xs[:, 2] ** 4 * np.sin(xs[:, 0])
+    ver8 = U.driver_verdict(U.sobol_indices(small, ys, seed=3))
+    assert not ver8["resolved"] and ver8["contenders"]
+    # an input with no effect is ruled out even where the driver is not resolved
+    fake = dict(names=["a", "b", "c"], ST=[0.5, 0.4, 0.01], ST_conf=[0.3, 0.3, 0.02])
+    assert U.driver_verdict(fake) == dict(
+        driver="a", resolved=False, contenders=["b"], negligible=["c"]
+    )
+    # a driver whose interval reaches 0 still wins when every other input is negligible
+    lone = dict(names=["a", "b"], ST=[0.5, 0.01], ST_conf=[0.6, 0.02])
+    assert U.driver_verdict(lone)["resolved"]
     # a missing output drops its whole base point, the rest still gives the answer
     y[5] = np.nan
     ind2 = U.sobol_indices(design, y, seed=3)

@@ -296,6 +296,38 @@ def driver(ind: dict[str, Any]) -> str | None:
     return ind["names"][int(np.nanargmax(st))]
 
 
+NEGLIGIBLE_ST = 0.05  # an input whose total index is below this with its half-width
+
+
+def driver_verdict(ind: dict[str, Any]) -> dict[str, Any]:
+    """The driver and whether the samples tell it apart from the other inputs.
+
+    ``negligible``: the inputs whose ``ST + conf`` is below
+    :data:`NEGLIGIBLE_ST` (SALib's 95 % bootstrap half-widths): ruled out as
+    drivers at any N. ``contenders``: the other inputs, not negligible, whose
+    total index reaches the driver's lower bound (``ST + conf >= ST_driver -
+    conf_driver``): with these samples they may drive the spread as much;
+    ``resolved`` when there are none.
+    """
+    name = driver(ind)
+    if name is None:
+        return {"driver": None, "resolved": False, "contenders": [], "negligible": []}
+    names = list(ind["names"])
+    st = np.asarray(ind["ST"], dtype=float)
+    cf = np.nan_to_num(np.asarray(ind.get("ST_conf", np.zeros_like(st)), dtype=float), nan=np.inf)
+    j = names.index(name)
+    lo = st[j] - cf[j]
+    others = [i for i in range(len(names)) if i != j]
+    negligible = [names[i] for i in others if st[i] + cf[i] < NEGLIGIBLE_ST]
+    contenders = [names[i] for i in others if st[i] + cf[i] >= lo and names[i] not in negligible]
+    return {
+        "driver": name,
+        "resolved": not contenders,
+        "contenders": contenders,
+        "negligible": negligible,
+    }
+
+
 def analysis_summary(a: dict[str, Any]) -> dict[str, Any]:
     return {
         "thresholds_mm": a["thresholds_mm"],
@@ -339,10 +371,16 @@ def headline(a: dict[str, Any]) -> list[str]:
             lines.append(f"{r['damper']}, {r['family']}: no peak in any sample")
             continue
         pe = st.get("p_exceed")
+        ver = driver_verdict(r["indices"]["peak_amplitude_mm"])
+        told = (
+            f" (not told apart from {', '.join(ver['contenders'])} with these samples)"
+            if ver["contenders"]
+            else ""
+        )
         lines.append(
             f"{r['damper']}, {r['family']}: peak median {st['p50']:.4g} mm, 95th percentile "
             f"{st['p95']:.4g} mm, P(peak > {r['threshold_mm']:.3g} mm) = "
-            f"{pe:.2f}; driven by {r['driver'] or '?'}"
+            f"{pe:.2f}; driven by {r['driver'] or '?'}{told}"
             + (f" ({r['n_failed']} solves stopped early: left out)" if r["n_failed"] else "")
         )
     return lines
@@ -358,6 +396,7 @@ def answer_rows(a: dict[str, Any]) -> list[dict[str, Any]]:
             st = r["stats"]["peak_amplitude_mm"]
             ind = r["indices"]["peak_amplitude_mm"]
             j = ind["names"].index(r["driver"]) if r["driver"] else None
+            ver = driver_verdict(ind)
             rows.append(
                 {
                     "family": fam,
@@ -374,6 +413,9 @@ def answer_rows(a: dict[str, Any]) -> list[dict[str, Any]]:
                     "driver": r["driver"],
                     "driver_ST": ind["ST"][j] if j is not None else None,
                     "driver_ST_conf": ind["ST_conf"][j] if j is not None else None,
+                    "driver_resolved": ver["resolved"],
+                    "driver_contenders": "; ".join(ver["contenders"]),
+                    "negligible_inputs": "; ".join(ver["negligible"]),
                     "failed_solves": r["n_failed"],
                 }
             )

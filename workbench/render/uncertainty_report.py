@@ -73,7 +73,10 @@ def uncertainty_sections(
                     "95th-percentile peak over the "
                     "samples every damper solved (p95_common; p95: each damper's own solved "
                     "samples), P(peak > threshold) and the input that drives the spread "
-                    "(largest total Sobol index, with its bootstrap half-width)",
+                    "(largest total Sobol index, with its bootstrap half-width; "
+                    "driver_contenders: the inputs whose index interval reaches the driver's, "
+                    "not told apart with these samples; negligible_inputs: total index "
+                    "below 0.05 with its half-width)",
                 },
                 {
                     "path": "tables/uncertainty_stats.csv",

@@ -69,6 +69,7 @@ from ..post.uncertainty import (
     analysis_summary,
     answer_rows,
     driver,
+    driver_verdict,
     headline,
     index_rows,
     make_design,
@@ -402,6 +403,9 @@ def write_h5(
                 for k in ("S1", "S1_conf", "ST", "ST_conf"):
                     sq[k] = np.asarray(r["indices"][q][k], dtype=float)
             grp.attrs["driver"] = r["driver"] or ""
+            ver = driver_verdict(r["indices"]["peak_amplitude_mm"])
+            grp.attrs["driver_resolved"] = ver["resolved"]
+            grp.attrs["driver_contenders"] = json.dumps(ver["contenders"])
             grp.attrs["threshold_mm"] = np.nan if r["threshold_mm"] is None else r["threshold_mm"]
         h.attrs["thresholds_mm"] = json.dumps(a["thresholds_mm"])
         h.attrs["ranking"] = json.dumps(a.get("ranking", {}))
@@ -477,6 +481,7 @@ __all__ = [
     "analysis_summary",
     "answer_rows",
     "driver",
+    "driver_verdict",
     "headline",
     "index_rows",
     "make_design",
