@@ -372,3 +372,33 @@ def test_synthesised_flanks_sampled_across_the_stuck_range():
         np.testing.assert_allclose(s.out_amp[on], exact, rtol=1e-6)
         checked += int(on.sum())
     assert checked > 40
+
+
+def test_a_peak_inside_a_coarse_segment_whose_output_bends_is_flagged():
+    """Across the stuck range (one continuation step) the Jenkins oscillator is linear: a
+    peak there is exact and valid. If the output per modal amplitude changed across that
+    segment (as a shakedown of stuck contacts shifts the mean position on the FE rig), the
+    interpolated peak would be a guess: the synthesis says so and is not valid."""
+    import dataclasses
+
+    from workbench.hbm.nlmodes import slip_amplitude
+
+    ex = sdof_jenkins()
+    b = nonlinear_mode(ex.system, f1=ex.f1, harmonics=(0, 1, 3), outputs=ex.outputs)
+    assert b.amplitude[1] > 10 * b.amplitude[0]  # the stuck range in one step
+    # a level whose peak lies inside that segment: the stuck peak x = F / (2 zeta k)
+    a_mid = 0.5 * slip_amplitude(ex.system, b.mode)
+    lv = None
+    for cand in np.geomspace(1e-3, 1.0, 61):
+        s = synthesize(b, ex.f1, cand, 0)
+        if b.amplitude[0] * 1.5 < s.peak_modal_amplitude < a_mid:
+            lv = float(cand)
+            break
+    assert lv is not None
+    s = synthesize(b, ex.f1, lv, 0)
+    assert s.valid, s.reasons
+    bent = b.out_amp.copy()
+    bent[1] *= 1.05  # the far end's output per amplitude 5 % off the near end's
+    s2 = synthesize(dataclasses.replace(b, out_amp=bent), ex.f1, lv, 0)
+    assert not s2.valid
+    assert any("coarse segment" in r and "5.0 %" in r for r in s2.reasons), s2.reasons

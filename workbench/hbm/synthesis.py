@@ -29,7 +29,11 @@ resonance pumps energy into them); the damping ratio stays below
 ``damping_max`` (the theory assumes a light, resonant response); the
 other modes' stuck linear response to the same force at the peak frequency
 stays below ``others_max`` of the peak amplitude (what the single mode
-leaves out: a close or strongly driven neighbour).
+leaves out: a close or strongly driven neighbour); the peak is not
+interpolated over a backbone segment wider than ``SEGMENT_MAX`` in amplitude
+across which the output per modal amplitude changes by more than
+``SEGMENT_CHANGE`` (the continuation solves a point at each requested
+level's peak; this catches a level it did not, or one where that solve failed).
 """
 
 from __future__ import annotations
@@ -43,6 +47,12 @@ from ..errors import InputError, check_range
 from .nlmode_branch import NlModeBranch
 
 TWO_PI = 2.0 * np.pi
+# a peak inside a backbone segment wider than this in amplitude, whose output per modal
+# amplitude changes by more than SEGMENT_CHANGE across it, is not trusted to the interpolation
+# (e.g. the one step across the stuck range, where a shakedown of the stuck contacts can
+# shift the mean position)
+SEGMENT_MAX = 1.25
+SEGMENT_CHANGE = 0.02
 
 
 @dataclass
@@ -232,6 +242,16 @@ def synthesize(
     w_pk = at(w)
     xi_pk = at(xi)
     f_pk = at(W) / TWO_PI
+    if hit.size and 0 <= th <= 1:  # a peak interpolated over a coarse segment
+        a0, a1 = float(a[j - 1]), float(a[j])
+        change = abs((y[j] / a1) / max(y[j - 1] / a0, 1e-300) - 1.0)
+        on_point = min(abs(np.log(a_pk / a0)), abs(np.log(a_pk / a1))) < 1e-3
+        if a1 > SEGMENT_MAX * a0 and change > SEGMENT_CHANGE and not on_point:
+            reasons.append(
+                f"the peak lies in a coarse segment of the backbone (modal amplitude "
+                f"{a0:.4g} to {a1:.4g}) over which the output per modal amplitude changes "
+                f"by {100 * change:.1f} %: not solved at the peak"
+            )
 
     # the curve: both sides of the main branch (the backbone below the peak) and the peak
     # (between backbone points further apart than FLANK_RATIO in amplitude, e.g. across
