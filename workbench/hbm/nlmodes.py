@@ -208,11 +208,9 @@ def nonlinear_mode(
     rows: dict[str, list] = {k: [] for k in POINT_ARRAYS}
     lag = check_int("jacobian_lag", jacobian_lag, 1)
     snes = Snes(prob, tol, tol_stall, max_newton, lag=lag, linear=linear)
-    # chord iterations converge linearly: more of them per point, same step control; Newton
-    # (Krylov) steps are counted as Newton's, but get as many iterations (near the first slip
-    # a shakedown of the stuck contacts makes the residual rough: up to ~20 iterations)
+    # chord iterations converge linearly: more of them per point, same step control
     its_scale = 1.0 if lag == 1 or snes.linear == "krylov" else 2.5
-    snes.set_max_it(round(max_newton * (2.5 if snes.linear == "krylov" else its_scale)))
+    snes.set_max_it(round(max_newton * its_scale))
     message, failed, completed = "", False, False
     s0, s1 = np.log(a0), np.log(a1)
     phi1_ref = None
@@ -288,9 +286,18 @@ def nonlinear_mode(
             arc = 0  # > 0: steps left in pseudo-arc-length mode (a fold in amplitude)
             hist = [Y]
             s_top, since_top = float(Y[-1]), 0
+            n_solves = 0
             while True:
                 if len(rows["amplitude"]) >= max_points:
                     raise _Stop(f"stopped after max_points = {max_points}", False)
+                n_solves += 1
+                if n_solves > 5 * max_points:  # refused and halved steps: never without end
+                    raise _Stop(
+                        f"stopped after {n_solves - 1} corrector solves for "
+                        f"{len(rows['amplitude'])} points (steps refused or halved over and "
+                        "over); the backbone so far is kept",
+                        True,
+                    )
                 if Y_prev is None:
                     t = np.zeros(N + 3)
                     t[-1] = span  # along ln a: the linear mode does not change
@@ -478,7 +485,9 @@ def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) 
             th = np.log(s.peak_modal_amplitude / a[j - 1]) / np.log(a[j] / a[j - 1])
             pt = float(np.exp(np.log(p0) + th * (np.log(p1) - np.log(p0))))
             Yg = snes.scaled(y0 + th * (y1 - y0), np.log(pt))
-            Y, ok, its = snes.solve(Yg)
+            snes.set_max_it(max(snes.max_it, 30))  # a point at a given amplitude, worth
+            Y, ok, its = snes.solve(Yg)  # more iterations (near the first slip, a shakedown
+            # of the stuck contacts makes the residual rough: ~20 iterations)
             if not ok:
                 continue
             n_before = len(rows["amplitude"])
