@@ -126,13 +126,21 @@ def study_backbones(
     from .runner import prepare_model
 
     out = Path(out)
-    if comm is not None and comm.rank != 0:
-        return {"rows": [], "backbones": [], "timings": {}}
     cases = plan(spec) if cases is None else cases
     prepared = dict(prepared or {})
     groups: dict[tuple[str, float], list[Case]] = {}
     for c in cases:
         groups.setdefault((c.model_digest, float(c.phase_deg)), []).append(c)
+    if comm is not None and comm.size > 1:
+        # the backbones run on rank 0, but loading (or building) a model is collective:
+        # every rank prepares the models the curves did not (all cases cached), together
+        for (md, _ph), cs in groups.items():
+            key = backbone_key(cs[0], relative_range, n_steps, [c.force_n for c in cs])
+            cached = (out / "cache" / SUB / f"{key}.h5").is_file() and not force
+            if md not in prepared and not cached:
+                prepared[md] = prepare_model(cs[0], out, comm=comm)
+    if comm is not None and comm.rank != 0:
+        return {"rows": [], "backbones": [], "timings": {}}
     ndir = out / "cache" / SUB
     ndir.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
