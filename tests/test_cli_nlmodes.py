@@ -3,6 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
+import shutil
+import subprocess
+import sys
 
 import pytest
 from conftest import ROOT, assert_nonblank, run_upd
@@ -77,46 +81,28 @@ def test_study_with_nonlinear_modes(tmp_path):
                 assert_nonblank(out / f["path"])
     html = (out / "report.html").read_text()
     assert "backbone" in html
+    tiny = ROOT / "tests" / "studies" / "tiny.toml"
+
+    def nlmodes_rows() -> list[dict]:
+        # with the study's options: --no-stability is part of the cases' keys
+        r = run_upd("nlmodes", tiny, "--no-stability", "--json", "--out", out)
+        assert r.code == 0, r
+        return r.json["rows"]
+
     # a second run reuses the backbone (cached with the cases)
-    # (with the study's options: --no-stability is part of the cases' keys)
-    r = run_upd(
-        "nlmodes",
-        ROOT / "tests" / "studies" / "tiny.toml",
-        "--no-stability",
-        "--json",
-        "--out",
-        out,
-    )
-    assert r.code == 0, r
-    rows = r.json["rows"]
+    rows = nlmodes_rows()
     assert rows and all(row["hbm_peak_amplitude_mm"] is not None for row in rows)
     # under mpirun with every case cached, the backbones (rank 0) still need the models,
     # whose loading is collective: all ranks load them first (it used to hang here)
-    import os
-    import shutil
-    import subprocess
-    import sys
-
-    from conftest import ROOT as root
-
     shutil.rmtree(out / "cache" / "nlmodes")
     exe = shutil.which("mpirun")
     assert exe, "mpirun is needed"
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", UPD_NO_PROGRESS="1")
     cmd = [exe, "-n", "2", "--allow-run-as-root", "--oversubscribe", sys.executable]
-    cmd += ["-m", "workbench.cli.main", "study", str(root / "tests" / "studies" / "tiny.toml")]
+    cmd += ["-m", "workbench.cli.main", "study", str(tiny)]
     cmd += ["--nonlinear-modes", "--no-stability", "--json", "--out", str(out)]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=root, env=env)
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=900, cwd=ROOT, env=env)
     assert p.returncode == 0, p.stderr[-3000:]
     assert (out / "cache" / "nlmodes").is_dir()  # computed again, on rank 0
-    r2 = run_upd(
-        "nlmodes",
-        ROOT / "tests" / "studies" / "tiny.toml",
-        "--no-stability",
-        "--json",
-        "--out",
-        out,
-    )
-    assert r2.code == 0, r2
-    for a, b in zip(rows, r2.json["rows"], strict=True):  # the same backbone and synthesis
+    for a, b in zip(rows, nlmodes_rows(), strict=True):  # the same backbone and synthesis
         assert b["syn_peak_amplitude_mm"] == pytest.approx(a["syn_peak_amplitude_mm"], rel=1e-6)
