@@ -82,8 +82,11 @@ def plot_synthesis(
     unit: str = "m",
     title: str = "",
     band_hz: tuple[float, float] | None = None,
+    level_unit: str = "",
 ) -> Path:
     """Synthesised forced responses (solid), the full HBM curves (dashed) and the backbone.
+
+    ``level_unit``: the excitation level's unit in the legend (e.g. "N").
 
     ``syntheses``: :class:`workbench.hbm.synthesis.Synthesis` records;
     ``hbm``: the HBM branches of the same levels (or None); an invalid
@@ -99,7 +102,8 @@ def plot_synthesis(
             "-" if s.valid else ":",
             color=col,
             lw=1.4,
-            label=f"level {s.level:g}" + ("" if s.valid else " (not valid)"),
+            label=f"level {s.level:g}{' ' + level_unit if level_unit else ''}"
+            + ("" if s.valid else " (not valid)"),
         )
         ax.plot(
             s.peak_freq_hz,

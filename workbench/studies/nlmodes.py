@@ -390,6 +390,7 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
             unit="mm",
             band_hz=band,
             title=f"{b['label']}: synthesis (solid) and full HBM",
+            level_unit="N",
         )
         sec_syn["figures"].append(
             {
