@@ -466,6 +466,9 @@ def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) 
     """
     from .synthesis import synthesize
 
+    # a point at a given amplitude is worth more iterations than a continuation step (near
+    # the first slip a shakedown of the stuck contacts makes the residual rough: ~20)
+    snes.set_max_it(max(snes.max_it, 30))
     for _ in range(3):
         nm = branch()
         added = 0
@@ -485,9 +488,7 @@ def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) 
             th = np.log(s.peak_modal_amplitude / a[j - 1]) / np.log(a[j] / a[j - 1])
             pt = float(np.exp(np.log(p0) + th * (np.log(p1) - np.log(p0))))
             Yg = snes.scaled(y0 + th * (y1 - y0), np.log(pt))
-            snes.set_max_it(max(snes.max_it, 30))  # a point at a given amplitude, worth
-            Y, ok, its = snes.solve(Yg)  # more iterations (near the first slip, a shakedown
-            # of the stuck contacts makes the residual rough: ~20 iterations)
+            Y, ok, its = snes.solve(Yg)
             if not ok:
                 continue
             n_before = len(rows["amplitude"])

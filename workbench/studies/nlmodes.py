@@ -131,29 +131,33 @@ def study_backbones(
     groups: dict[tuple[str, float], list[Case]] = {}
     for c in cases:
         groups.setdefault((c.model_digest, float(c.phase_deg)), []).append(c)
+    ndir = out / "cache" / SUB
+
+    def files(cs: list[Case]) -> tuple[Path, Path, bool]:
+        """The backbone's cache files and whether it is to be read from them."""
+        key = backbone_key(cs[0], relative_range, n_steps, [c.force_n for c in cs])
+        h5, npz = ndir / f"{key}.h5", ndir / f"{key}.npz"
+        return h5, npz, h5.is_file() and npz.is_file() and not force
+
     if comm is not None and comm.size > 1:
         # the backbones run on rank 0, but loading (or building) a model is collective:
         # every rank prepares the models the curves did not (all cases cached), together
         for (md, _ph), cs in groups.items():
-            key = backbone_key(cs[0], relative_range, n_steps, [c.force_n for c in cs])
-            cached = (out / "cache" / SUB / f"{key}.h5").is_file() and not force
-            if md not in prepared and not cached:
+            if md not in prepared and not files(cs)[2]:
                 prepared[md] = prepare_model(cs[0], out, comm=comm)
     if comm is not None and comm.rank != 0:
         return {"rows": [], "backbones": [], "timings": {}}
-    ndir = out / "cache" / SUB
     ndir.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
     backbones: list[dict[str, Any]] = []
     timings: dict[str, float] = {}
     for (md, _ph), cs in groups.items():
         c0 = cs[0]
-        key = backbone_key(c0, relative_range, n_steps, [c.force_n for c in cs])
-        h5, npz = ndir / f"{key}.h5", ndir / f"{key}.npz"
+        h5, npz, cached = files(cs)
         label = f"{c0.damper}, {family_name(c0.phase_deg)}" + (
             f" [{c0.variant}]" if c0.variant else ""
         )
-        if h5.is_file() and npz.is_file() and not force:
+        if cached:
             nm = NlModeBranch.load(h5)
             with np.load(npz) as z:
                 f1, band = z["f1"], tuple(float(v) for v in z["band"])
