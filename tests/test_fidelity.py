@@ -24,6 +24,9 @@ from workbench.studies.spec import resolve
 
 # ---- Pareto front ---------------------------------------------------------------------------
 
+# one worker computes the module's tiny fidelity study (its fixture) once for every test
+pytestmark = pytest.mark.xdist_group("fidelity")
+
 
 def test_pareto_front_known_points():
     pts = [

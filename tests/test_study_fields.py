@@ -24,7 +24,9 @@ import pyvista as pv
 
 from tests.conftest import TINY, run_upd
 
-pytestmark = pytest.mark.xdist_group("resume")  # shares the tiny study of conftest
+# slow (about 3 min of the default run: the field expansion and a 2-rank run): run by
+# `make test-slow` with the benchmarks; shares the tiny study of conftest
+pytestmark = [pytest.mark.xdist_group("resume"), pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""A study killed at any moment resumes; under mpirun it gives the serial answers."""
+"""A study killed at any moment resumes; uninterrupted and under mpirun it answers the same."""
 
 from __future__ import annotations
 
@@ -40,12 +40,13 @@ def _report_shape(out):
     }
 
 
-def test_killed_study_resumes_and_mpi_matches_serial(tiny_resumed, tmp_path):
+def test_killed_study_resumes_and_reuses_its_work(tiny_resumed, tmp_path):
     out, first = tiny_resumed  # SIGKILLed after its first case, then resumed
     assert first["n_reused"] >= 1 and first["n_reused"] + first["n_computed"] == 2
     serial = _cases(first)
     out = Path(shutil.copytree(out, tmp_path / "tiny"))
 
+    resumed_shape = _report_shape(out)
     # the last run of a resumed study may find every case cached (the run before it killed
     # after its curves, before the model pictures): its report still has the pictures and
     # lists the reused work with what it cost when it was computed
@@ -57,7 +58,7 @@ def test_killed_study_resumes_and_mpi_matches_serial(tiny_resumed, tmp_path):
     assert all(again[k][q] == serial[k][q] for k in serial for q in KEYS)
     for name in ("model_cone.png", "modes_cone.png"):
         assert (out / "figures" / name).is_file()
-    resumed_shape = _report_shape(out)
+    assert _report_shape(out) == resumed_shape  # the same report, rebuilt from the cache
     reused = {
         k.split(",")[0]: v
         for k, v in json.loads((out / "manifest.json").read_text())["timings"].items()
@@ -68,6 +69,15 @@ def test_killed_study_resumes_and_mpi_matches_serial(tiny_resumed, tmp_path):
     assert reused["cases (2)"] == pytest.approx(sum(c["wall_s"] for c in first["cases"]), abs=0.01)
     assert reused["reduction rig"] > 0.5 and reused["geometry"] > 0.1
 
+
+# slow (about 2 min of the default run: an uninterrupted serial and a 2-rank run of the
+# tiny study); run by `make test-slow` with the benchmarks
+@pytest.mark.slow
+def test_uninterrupted_and_two_rank_runs_match_the_resumed_one(tiny_resumed, tmp_path):
+    out, first = tiny_resumed
+    serial = _cases(first)
+    out = Path(shutil.copytree(out, tmp_path / "tiny"))
+    resumed_shape = _report_shape(out)
     rf = run_upd("study", TINY, "--out", out, "--json", "--force")  # uninterrupted
     assert rf.code == 0 and rf.json["n_computed"] == 2
     assert _report_shape(out) == resumed_shape
