@@ -1,10 +1,11 @@
-"""Craig-Bampton reduction of one body onto its interface DOFs (PETSc/SLEPc, MPI).
+"""Craig-Bampton reduction of one body onto its interface DOFs (PETSc/MUMPS, MPI).
 
 Partition the DOFs into interface ``b`` (x, y, z of every interface node)
 and interior ``i``. With the interface held fixed, the interior has the
 fixed-interface modes ``K_ii phi_k = w_k^2 M_ii phi_k`` (``phi_k^T M_ii
-phi_k = 1``); the static constraint modes are ``Psi = -K_ii^{-1} K_ib`` (one
-MUMPS factorisation of ``K_ii``, reused from the eigen solve, and one
+phi_k = 1``, by block shift-and-invert Krylov on MUMPS multi-right-hand-side
+solves, :mod:`.block_eigen`); the static constraint modes are ``Psi =
+-K_ii^{-1} K_ib`` (the same MUMPS factorisation of ``K_ii`` and one
 multi-right-hand-side solve per block of columns). The body's DOFs are
 approximated by::
 
@@ -36,10 +37,12 @@ import numpy as np
 
 from ..errors import InputError, SolveError
 from ..log import progress_bar, stage
+from .block_eigen import block_eigen
 from .elasticity import ElasticBody
 from .interface import InterfaceNodes
 from .parallel import allrows, allsum, info
-from .solvers import eigen_solve, mumps_defaults, petsc_options
+from .parallel import dense_rows as _dense
+from .solvers import mumps_defaults, petsc_options
 
 log = logging.getLogger(__name__)
 
@@ -69,19 +72,6 @@ def _local_csr(A, n_cols: int):
     indptr, indices, data = A.getValuesCSR()
     n_rows = A.getLocalSize()[0]
     return sp.csr_matrix((data, indices, indptr), shape=(n_rows, n_cols))
-
-
-def _dense(comm, local: np.ndarray, n_global_rows: int):
-    """A PETSc MPIDENSE matrix from this rank's rows (copied, column-major)."""
-    from petsc4py import PETSc
-
-    arr = np.asfortranarray(local, dtype=PETSc.ScalarType)
-    ncols = arr.shape[1]
-    D = PETSc.Mat().createDense(((arr.shape[0], n_global_rows), (PETSc.DECIDE, ncols)), comm=comm)
-    D.setUp()
-    D.getDenseArray()[:] = arr
-    D.assemble()
-    return D
 
 
 @dataclass
@@ -142,43 +132,38 @@ def split_interface(body: ElasticBody, nodes: InterfaceNodes) -> InterfaceSplit:
     )
 
 
-def interface_modes(sp_: InterfaceSplit, n_modes: int, name: str, comm):
-    """The fixed-interface modes (columns, this rank's interior rows, signs fixed) and
-    the eigen solution holding the MUMPS factor of K_ii."""
-    sol = eigen_solve(
-        sp_.K_ii,
-        sp_.M_ii,
-        n_modes,
-        sigma=0.0,
-        prefix="upd_cb_",
-        what=f"{name} fixed-interface modes",
-    )
-    cols = []
-    for v in sol.vectors:
-        a = v.getArray().copy()
-        if comm.allreduce(float(sp_.sign_w @ a)) < 0:
-            a = -a
-        cols.append(a)
-    Phi = np.column_stack(cols) if cols else np.zeros((len(sp_.interior), 0))
-    return Phi, sol
-
-
 def interior_factor(sp_: InterfaceSplit, n_modes: int, name: str, comm):
-    """``(Phi, lam, F, keep)``: the fixed-interface modes and eigenvalues (none for
-    ``n_modes == 0``), the MUMPS factor F of K_ii and the PETSc object that holds it
-    (``keep.destroy()`` releases it)."""
+    """``(Phi, lam, F, keep)``: the fixed-interface modes (columns, this rank's interior
+    rows, signs fixed) and eigenvalues (none for ``n_modes == 0``), the MUMPS factor F of
+    K_ii and the PETSc KSP that holds it (``keep.destroy()`` releases it).
+
+    One factorisation serves the eigen solve (block shift-and-invert Krylov,
+    :mod:`.block_eigen`) and the constraint modes.
+    """
     from petsc4py import PETSc
 
-    if n_modes > 0:
-        Phi, sol = interface_modes(sp_, n_modes, name, comm)
-        return Phi, sol.eigenvalues, sol.factor(), sol.eps
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix("upd_cb_")
     ksp.setOperators(sp_.K_ii)
     with petsc_options("upd_cb_", mumps_defaults(st=False)):
         ksp.setFromOptions()
-        ksp.setUp()
-    return np.zeros((len(sp_.interior), 0)), np.zeros(0), ksp.getPC().getFactorMatrix(), ksp
+        try:
+            ksp.setUp()
+        except Exception as e:  # noqa: BLE001 - PETSc.Error carries only an error code
+            raise SolveError(
+                f"{name}: the factorisation of the interior stiffness failed ({e}); for more "
+                "MUMPS work space try PETSC_OPTIONS='-upd_cb_mat_mumps_icntl_14 200'"
+            ) from e
+    F = ksp.getPC().getFactorMatrix()
+    if n_modes == 0:
+        return np.zeros((len(sp_.interior), 0)), np.zeros(0), F, ksp
+    lam, Phi, _ = block_eigen(
+        sp_.K_ii, sp_.M_ii, F, n_modes, comm, what=f"{name} fixed-interface modes"
+    )
+    for k in range(Phi.shape[1]):
+        if comm.allreduce(float(sp_.sign_w @ Phi[:, k])) < 0:
+            Phi[:, k] = -Phi[:, k]
+    return Phi, lam, F, ksp
 
 
 def craig_bampton(

@@ -41,6 +41,19 @@ def allrows(comm, a: np.ndarray) -> np.ndarray:
     return np.concatenate(parts, axis=0) if parts else np.asarray(a)
 
 
+def dense_rows(comm, local: np.ndarray, n_global_rows: int):
+    """A PETSc MPIDENSE matrix from this rank's rows (copied, column-major)."""
+    from petsc4py import PETSc
+
+    arr = np.asfortranarray(local, dtype=PETSc.ScalarType)
+    ncols = arr.shape[1]
+    D = PETSc.Mat().createDense(((arr.shape[0], n_global_rows), (PETSc.DECIDE, ncols)), comm=comm)
+    D.setUp()
+    D.getDenseArray()[:] = arr
+    D.assemble()
+    return D
+
+
 def info(log, comm, msg: str, *args) -> None:
     """``log.info`` on rank 0 only (every rank computes the same thing)."""
     if comm is None or comm.rank == 0:
