@@ -225,19 +225,22 @@ def craig_bampton(
             raise SolveError(f"{body.name}: constraint modes inaccurate (residual {res / ref:.1e})")
     # release the factorisation (the largest allocation) before the projections
     del F
-    keep.destroy()  # the EPS or KSP holding it (the eigen solution itself is not kept)
+    keep.destroy()  # the KSP holding it
 
     with stage(timings, "projection"):
         Khat = K_bb + allsum(comm, Kib.T @ Psi)
         MibPsi = allsum(comm, Mib.T @ Psi)
-        PMP = np.empty((nb, nb))
+        # Psi^T M_ii Psi is symmetric: each block of columns only needs its rows from the
+        # block's first column down (half the products); the upper triangle is mirrored
+        PMP = np.zeros((nb, nb))
         for c0 in range(0, nb, RHS_BLOCK):
             c1 = min(nb, c0 + RHS_BLOCK)
             D = _dense(comm, Psi[:, c0:c1], n_i)
             Y = M_ii.matMult(D)
-            PMP[:, c0:c1] = allsum(comm, Psi.T @ Y.getDenseArray())
+            PMP[c0:, c0:c1] = allsum(comm, Psi[:, c0:].T @ Y.getDenseArray())
             D.destroy()
             Y.destroy()
+        PMP = np.tril(PMP) + np.tril(PMP, -1).T
         Mhat = M_bb + MibPsi + MibPsi.T + PMP
         if n_modes:
             MPhi = np.empty_like(Phi)
