@@ -3,12 +3,16 @@
 Solver options go through the PETSc options database under a prefix per
 role (``upd_modes_``, ``upd_cb_``, ``upd_free_``), never through sys.argv.
 Our defaults are written only where the user has not set the key (for
-example with ``PETSC_OPTIONS="-upd_cb_st_mat_mumps_icntl_14 200"``), and
-removed again after the solve.
+example with ``PETSC_OPTIONS="-upd_modes_st_mat_mumps_icntl_14 200"``), and
+removed again after the solve. The Craig-Bampton reduction factorises its
+interior stiffness with a plain KSP under ``upd_cb_`` (no ``st_``:
+``-upd_cb_mat_mumps_icntl_14 200``) and finds its fixed-interface modes
+with :mod:`.block_eigen`, not SLEPc.
 
-Defaults: Krylov-Schur, shift-and-invert (``st_type sinvert``) with a
-``preonly`` KSP and an LU factorisation by MUMPS; MUMPS ICNTL(14) (extra
-work space, %) raised to 80 because the 3-D P2 fill estimate is often short.
+Defaults of the SLEPc solves (``upd modes``): Krylov-Schur, shift-and-invert
+(``st_type sinvert``) with a ``preonly`` KSP and an LU factorisation by
+MUMPS; MUMPS ICNTL(14) (extra work space, %) raised to 80 because the 3-D
+P2 fill estimate is often short.
 Do not set ``st_pc_type cholesky``: from the options database it drops MUMPS
 and runs PETSc's own serial factorisation (about 12 times slower here).
 """
