@@ -1,9 +1,9 @@
 """Lowest eigenpairs of ``K x = lam M x`` by block shift-and-invert Krylov with MUMPS block solves.
 
 Why not SLEPc's Krylov-Schur here: it applies ``K^-1`` one vector at a time,
-and on a 3-D P2 mesh each MUMPS triangular solve is memory-bound (0.13 s on
-the 9 mm cone damper, 48 M factor entries) while a block of 20 right-hand
-sides costs about 10 ms a column: the fixed-interface modes of a
+and on a 3-D P2 mesh each MUMPS triangular solve is memory-bound (0.13-0.20 s
+on the 9 mm cone damper, 48 M factor entries) while a block of 6 right-hand
+sides costs about 40 ms a column: the fixed-interface modes of a
 Craig-Bampton reduction took 70-80 single solves. This solver builds the
 block Krylov space of ``T = K^-1 M`` from a random start block,
 
@@ -17,7 +17,8 @@ tests with shift-and-invert) is below ``tol``:
 
     || lam K^-1 M phi - phi || / || phi || <= tol,
 
-one block solve of the ``n`` Ritz vectors per check. The space grows by one
+from the blocks ``T V`` kept as the space is built (no solve of their own),
+checked once the space holds ``4 n`` vectors. The space grows by one
 block until all ``n`` pairs converge, or a :class:`SolveError` names what
 was reached. The start block is drawn over the global rows from a fixed
 seed, so the result does not depend on the number of ranks beyond
@@ -35,7 +36,9 @@ import logging
 import numpy as np
 
 from ..errors import SolveError
-from .parallel import allsum, dense_rows
+from .parallel import allsum
+from .parallel import dense_mult as _mult
+from .parallel import dense_solve as _solve
 
 log = logging.getLogger(__name__)
 
@@ -45,27 +48,6 @@ SEED = 20261127
 TOL = 1e-10
 BLOCK = 6  # right-hand sides per block: about 40 ms a column against 200 ms alone (9 mm cone)
 MAX_DIM_PER_PAIR = 30  # the Krylov space may grow to this many vectors per pair sought
-
-
-def _mult(A, X: np.ndarray, n_global: int, comm) -> np.ndarray:
-    """This rank's rows of ``A @ X`` (A a PETSc AIJ matrix, X this rank's rows)."""
-    D = dense_rows(comm, X, n_global)
-    Y = A.matMult(D)
-    out = Y.getDenseArray().copy()
-    D.destroy()
-    Y.destroy()
-    return out
-
-
-def _solve(F, X: np.ndarray, n_global: int, comm) -> np.ndarray:
-    """This rank's rows of ``K^-1 X`` by one MUMPS multi-right-hand-side solve."""
-    D = dense_rows(comm, X, n_global)
-    Y = D.duplicate()
-    F.matSolve(D, Y)
-    out = Y.getDenseArray().copy()
-    D.destroy()
-    Y.destroy()
-    return out
 
 
 def _orthonormalise(W, V, BV, B, n_global, comm):
@@ -148,7 +130,7 @@ def block_eigen(
     while dim < min(max_dim, n_global):
         W, BW = _orthonormalise(W, V, BV, B, n_global, comm)
         if W.shape[1] == 0:
-            break  # an invariant subspace (checked below)
+            break  # an invariant subspace: its pairs were checked when it last grew (or below)
         # T W: the next block before its orthonormalisation, kept so that the Ritz
         # vectors' residuals need no solve of their own
         TW = _solve(F, BW, n_global, comm)
@@ -168,7 +150,7 @@ def block_eigen(
             if worst <= tol:
                 return lam, Phi, dict(block=b, dim=dim, solves=solves, residual=worst)
         W = TW
-    if n <= dim < 4 * n or (dim >= n and W.shape[1] == 0):
+    if n <= dim < 4 * n:  # an invariant subspace found early: its pairs were not checked
         lam, Phi, worst = _ritz(V, TV, Ar, Br, n, comm)
         if worst <= tol:
             return lam, Phi, dict(block=b, dim=dim, solves=solves, residual=worst)

@@ -40,8 +40,7 @@ from ..log import progress_bar, stage
 from .block_eigen import block_eigen
 from .elasticity import ElasticBody
 from .interface import InterfaceNodes
-from .parallel import allrows, allsum, info
-from .parallel import dense_rows as _dense
+from .parallel import allrows, allsum, dense_mult, dense_solve, info
 from .solvers import mumps_defaults, petsc_options
 
 log = logging.getLogger(__name__)
@@ -205,14 +204,9 @@ def craig_bampton(
     ):
         for c0 in range(0, nb, RHS_BLOCK):
             c1 = min(nb, c0 + RHS_BLOCK)
-            B = _dense(comm, -Kib[:, c0:c1].toarray(), n_i)
-            X = B.duplicate()
-            F.matSolve(B, X)
-            Psi[:, c0:c1] = X.getDenseArray()
-            B.destroy()
-            X.destroy()
+            Psi[:, c0:c1] = dense_solve(F, -Kib[:, c0:c1].toarray(), n_i, comm)
             bar.update(c1 - c0)
-        # check the reused factorisation really is K_ii (it is the transform at shift 0)
+        # check the factorisation shared with the eigen solve really is the one of K_ii
         j = nb // 2
         r = K_ii.createVecs()[0]
         x = K_ii.createVecs()[0]
@@ -235,11 +229,8 @@ def craig_bampton(
         PMP = np.zeros((nb, nb))
         for c0 in range(0, nb, RHS_BLOCK):
             c1 = min(nb, c0 + RHS_BLOCK)
-            D = _dense(comm, Psi[:, c0:c1], n_i)
-            Y = M_ii.matMult(D)
-            PMP[c0:, c0:c1] = allsum(comm, Psi[:, c0:].T @ Y.getDenseArray())
-            D.destroy()
-            Y.destroy()
+            Y = dense_mult(M_ii, Psi[:, c0:c1], n_i, comm)
+            PMP[c0:, c0:c1] = allsum(comm, Psi[:, c0:].T @ Y)
         PMP = np.tril(PMP) + np.tril(PMP, -1).T
         Mhat = M_bb + MibPsi + MibPsi.T + PMP
         if n_modes:

@@ -27,9 +27,9 @@ import logging
 import numpy as np
 
 from ..errors import SolveError
-from .craig_bampton import _dense, interior_factor, split_interface
+from .craig_bampton import interior_factor, split_interface
 from .modes import BodyShapes, _gather_shapes, load_bodies
-from .parallel import allsum
+from .parallel import allsum, dense_solve
 
 log = logging.getLogger(__name__)
 
@@ -101,12 +101,7 @@ def _cb_field(geom, eb, body: str, rm, Q: np.ndarray, comm) -> list[np.ndarray]:
             )
         log.debug("%s: modes matched to the cached model to %.1e", body, mismatch)
     rhs = -(sp_.Kib @ ub[sp_.is_order])
-    B = _dense(comm, rhs, sp_.n_i)
-    X = B.duplicate()
-    F.matSolve(B, X)
-    ui = X.getDenseArray().copy() + Phi @ (R @ eta)
-    B.destroy()
-    X.destroy()
+    ui = dense_solve(F, rhs, sp_.n_i, comm) + Phi @ (R @ eta)
     keep.destroy()
     off = eb.dof_offset
     full = np.zeros((eb.n_local, Q.shape[1]))

@@ -54,6 +54,27 @@ def dense_rows(comm, local: np.ndarray, n_global_rows: int):
     return D
 
 
+def dense_mult(A, X: np.ndarray, n_global_rows: int, comm) -> np.ndarray:
+    """This rank's rows of ``A @ X`` (A a PETSc AIJ matrix, X this rank's rows of a block)."""
+    D = dense_rows(comm, X, n_global_rows)
+    Y = A.matMult(D)
+    out = Y.getDenseArray().copy()
+    D.destroy()
+    Y.destroy()
+    return out
+
+
+def dense_solve(F, X: np.ndarray, n_global_rows: int, comm) -> np.ndarray:
+    """This rank's rows of ``A^-1 X`` (F the factor of A) by one multi-right-hand-side solve."""
+    D = dense_rows(comm, X, n_global_rows)
+    Y = D.duplicate()
+    F.matSolve(D, Y)
+    out = Y.getDenseArray().copy()
+    D.destroy()
+    Y.destroy()
+    return out
+
+
 def info(log, comm, msg: str, *args) -> None:
     """``log.info`` on rank 0 only (every rank computes the same thing)."""
     if comm is None or comm.rank == 0:
