@@ -15,6 +15,9 @@ os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("UPD_NO_PROGRESS", "1")
+# studies and screens in tests run their FE stage in the test's own process (pytest-xdist
+# already fills the cores); the worker pool has its own tests (test_prefetch.py)
+os.environ.setdefault("UPD_WORKERS", "1")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
 ROOT = Path(__file__).resolve().parents[1]

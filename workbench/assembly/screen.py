@@ -55,11 +55,10 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
 from ..errors import InputError, check_range
-from .linear import family_frequency
+from .linear import family_frequency, modes
 
 STIFF_FACTOR = 1000.0  # contact stiffening of the rig bound
 N_TIME = 64  # samples per period of the slip/separation onset search
@@ -198,7 +197,7 @@ def onset_forces(
     Returns (F_slip, pair, F_sep, pair, stuck peak |response| per newton).
     """
     Ks = sys_.stiffness("stuck")
-    lam, phi = sla.eigh(Ks, sys_.M)
+    lam, phi = modes(Ks, sys_.M)
     w0 = 2 * np.pi * f_center_hz
     omegas = w0 * (1 + 4 * max(zeta, 1e-4) * np.linspace(-1, 1, N_FREQ))
     n_p = sys_.kt.size
@@ -267,7 +266,7 @@ def screen(
     fs, i_s, fp, i_p, resp = onset_forces(sys_, zeta, fam_st.freq_hz, law)
     # the sliding limit's peak (viscous damping only): where the response goes once the
     # damper slides through
-    lam, phi = sla.eigh(sys_.stiffness("sliding"), sys_.M)
+    lam, phi = modes(sys_.stiffness("sliding"), sys_.M)
     w_sl = 2 * np.pi * fam_sl.freq_hz
     om = w_sl * (1 + 4 * max(zeta, 1e-4) * np.linspace(-1, 1, N_FREQ))
     slide_peak = float(np.abs(_modal_response(lam, phi, sys_.r[None, :], sys_.f1, om, zeta)).max())

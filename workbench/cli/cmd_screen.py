@@ -88,5 +88,6 @@ def run(args: argparse.Namespace, ctx) -> dict:
         "files": [str(out / "screen.json"), str(out / "screen.csv")],
         "largest_force_n": res["f_max_n"],
         "seconds_per_model": {k: round(v, 2) for k, v in res["timings"].items()},
+        "worker_pool": res["pool"],
         **({"rows": rows} if ctx.json else {}),
     }

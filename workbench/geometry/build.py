@@ -93,6 +93,23 @@ def build_geometry(
     return _build_or_reuse(lay, dig, out_dir)
 
 
+def cached_geometry(
+    damper: str,
+    out_dir: Path,
+    *,
+    geometry_file: Path | None = None,
+    size_mm: float | None = None,
+    overrides: Mapping[str, Any] | None = None,
+) -> BuiltGeometry | None:
+    """The record of a finished :func:`build_geometry` in ``out_dir`` with these inputs, else None.
+
+    Cheap (no gmsh); raises InputError for bad parameters as the build would.
+    """
+    gp = load_geometry_params(damper, geometry_file, overrides, size_mm)
+    make_layout(gp)
+    return _reusable(Path(out_dir) / "geometry.h5", geometry_digest(gp))
+
+
 def _build_mpi(comm: Any, lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
     """Rank 0 builds; the others wait and load. An error on rank 0 is raised on every rank.
 

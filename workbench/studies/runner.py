@@ -16,10 +16,10 @@ A run killed at any moment leaves only whole files behind (every write is
 atomic), so running it again recomputes only the unfinished cases.
 ``force=True`` recomputes everything.
 
-MPI: geometry and reduction run on all ranks together (dolfinx in
-parallel); the cases are then spread over the ranks; rank 0 gathers the
-finished case files and writes the results and the report. The answers do
-not depend on the number of ranks.
+MPI: geometry and reduction on all ranks together (dolfinx; without mpirun
+a pool of local workers, :mod:`.prefetch`), then the cases spread over the
+ranks; rank 0 gathers the case files, writes the results and the report.
+The answers do not depend on the number of ranks or workers.
 
 The files a finished study writes (results, tables, report) are written by
 :mod:`.outputs`.
@@ -41,6 +41,7 @@ from ..log import bars_enabled, progress_bar
 from ..post.results import CaseResult, StudyResults
 from .outputs import check_failures, headline, write_manifest_and_report, write_outputs
 from .plan import Case, plan
+from .prefetch import prefetch_study
 from .spec import StudySpec
 
 log = logging.getLogger(__name__)
@@ -103,10 +104,7 @@ def study_lock(out: Path) -> Iterator[None]:
 
 
 def remove_stale_parts(out: Path) -> int:
-    """Delete the half-written ``.*.part`` files a killed run left in a study folder.
-
-    Called with the folder's lock held, so no other run is writing them.
-    """
+    """Delete the ``.*.part`` files a killed run left (called with the folder's lock held)."""
     n = 0
     for p in list(out.rglob(".*.part*")):
         try:
@@ -332,10 +330,11 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
 
         missing = missing_fields(cases, out, comm)
         need_models = list(dict.fromkeys(need_models + [cases[k].model_digest for k in missing]))
+    refreshed = prefetch_study(cases, need_models, out, force, timings, comm)  # serial: a pool
     for md in need_models:
         c = next(x for x in cases if x.model_digest == md)
         log.info("model for %s: geometry, reduction, assembly", c.damper)
-        prepared[md] = prepare_model(c, out, force=force, comm=comm)
+        prepared[md] = prepare_model(c, out, force=force and md not in refreshed, comm=comm)
         for k, v in prepared[md].timings.items():
             timings[k] = timings.get(k, 0.0) + v
 

@@ -1,0 +1,157 @@
+"""The worker pool that meshes and reduces a study's models at once (workbench.studies.prefetch).
+
+* the pool writes the very models one process writes (bitwise) and the
+  screen built on them is the same;
+* its scheduler starts the meshes first, never exceeds the memory budget
+  (a task larger than the budget runs alone), and leaves a failed task to
+  the main process (with the reductions that waited for it);
+* a bad ``UPD_WORKERS`` is refused with its name.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from workbench.errors import InputError
+from workbench.studies.prefetch import Task, _Scheduler, worker_count
+
+ROOT = Path(__file__).resolve().parents[1]
+TINY = ROOT / "tests" / "studies" / "tiny.toml"
+
+
+def test_the_pool_writes_the_models_one_process_writes(tmp_path, monkeypatch):
+    from conftest import run_upd
+
+    outs = {}
+    for n in ("2", "1"):
+        monkeypatch.setenv("UPD_WORKERS", n)
+        out = tmp_path / f"w{n}"
+        r = run_upd("screen", TINY, "--out", out, "--json")
+        assert r.code == 0, r
+        outs[n] = (out, r.json)
+    pool = outs["2"][1]["worker_pool"]
+    # meshes, rig, damper and the rigid damper of the screen's rig bound
+    assert pool["workers"] == 2 and pool["tasks"] == 4 and pool["failed"] == []
+    assert outs["1"][1]["worker_pool"]["workers"] == 0
+
+    def rows(out):
+        return [{k: v for k, v in r.items() if k != "seconds"} for r in json.loads(
+            (out / "screen.json").read_text())]  # fmt: skip
+
+    assert rows(outs["2"][0]) == rows(outs["1"][0])
+    files = sorted(p.name for p in (outs["1"][0] / "cache" / "fe").glob("*.h5"))
+    assert len(files) == 3
+    assert files == sorted(p.name for p in (outs["2"][0] / "cache" / "fe").glob("*.h5"))
+    for name in files:
+        with (
+            h5py.File(outs["1"][0] / "cache" / "fe" / name) as a,
+            h5py.File(outs["2"][0] / "cache" / "fe" / name) as b,
+        ):
+            for key in ("K", "M"):
+                assert np.array_equal(a[key][()], b[key][()]), (name, key)
+
+
+def test_a_bad_worker_count_is_refused_with_its_name(tmp_path, monkeypatch):
+    from conftest import run_upd
+
+    for bad in ("0", "two"):
+        monkeypatch.setenv("UPD_WORKERS", bad)
+        with pytest.raises(InputError, match="UPD_WORKERS"):
+            worker_count()
+        r = run_upd("screen", TINY, "--out", tmp_path / "x")
+        assert r.code == 2 and "UPD_WORKERS" in r.err and bad in r.err, r
+
+
+# --- the scheduler, with a pool that runs nothing --------------------------------------
+
+
+@dataclass
+class FakeCase:
+    model_digest: str
+    damper: str = "cone"
+    variant: str = ""
+
+
+class FakeResult:
+    def __init__(self, value=None, error=None):
+        self.value, self.error, self.done = value, error, False
+
+    def ready(self):
+        return self.done
+
+    def get(self):
+        if self.error is not None:
+            raise self.error
+        return self.value
+
+
+class FakePool:
+    def __init__(self):
+        self.started: list[tuple] = []
+
+    def apply_async(self, fn, args):
+        r = FakeResult(value=(1.0, {}))
+        self.started.append((args[0], args[1].model_digest, r))
+        return r
+
+
+class FakeBar:
+    total = 0
+
+    def update(self, n):
+        pass
+
+
+def scheduler(tasks, budget, n_workers=2):
+    sch = _Scheduler(FakePool(), tasks, n_workers, budget, Path("."), dict(failed=[],
+                     task_seconds={}))  # fmt: skip
+    sch.bar = FakeBar()
+    return sch
+
+
+def test_meshes_start_first_and_memory_is_never_overcommitted():
+    a, b = FakeCase("a"), FakeCase("b")
+    tasks = [
+        Task("rig", a, n_dofs=3000, label="rig a"),  # 72 MB each at 24 kB a DOF
+        Task("rig", b, n_dofs=3000, label="rig b"),
+        Task("geometry", FakeCase("c"), label="meshes c"),
+        Task("reductions", FakeCase("c"), after="c"),
+    ]
+    sch = scheduler(tasks, budget=100e6)
+    sch.start()
+    kinds = [s[0] for s in sch.pool.started]
+    assert kinds == ["geometry", "rig"]  # meshes first; the two rigs do not fit together
+    assert sum(t.memory for t in sch.running.values()) <= 100e6
+    # the placeholder of model c's reductions is never sent to a worker
+    assert all(s[0] != "reductions" for s in sch.pool.started)
+
+
+def test_a_task_larger_than_the_budget_runs_alone():
+    big, small = FakeCase("big"), FakeCase("small")
+    tasks = [Task("rig", big, n_dofs=10**6, label="big"), Task("damper", small, n_dofs=10,
+             label="small")]  # fmt: skip
+    sch = scheduler(tasks, budget=1e6)
+    sch.start()
+    assert [s[1] for s in sch.pool.started] == ["big"]  # alone, though over the budget
+    sch.pool.started[0][2].done = True
+    sch.collect()
+    sch.start()
+    assert [s[1] for s in sch.pool.started] == ["big", "small"]
+
+
+def test_a_failed_mesh_leaves_its_model_to_the_main_process():
+    c = FakeCase("c")
+    tasks = [Task("geometry", c, label="meshes c"), Task("reductions", c, after="c")]
+    sch = scheduler(tasks, budget=1e9)
+    sch.start()
+    r = sch.pool.started[0][2]
+    r.error, r.done = RuntimeError("gmsh said no"), True
+    sch.collect()
+    assert sch.res["failed"] == ["meshes c"]
+    assert sch.pending == [] and sch.running == {}  # its reductions are not attempted

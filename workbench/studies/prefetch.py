@@ -1,0 +1,343 @@
+"""Mesh and reduce a study's models concurrently on the local cores (runs without mpirun).
+
+Run without ``mpirun``, a study or a screen would build its models one
+after the other on one core: per damper the meshes (about 5 s on the 9 mm
+rig), the rig's Craig-Bampton reduction (15-30 s), the damper's (5-7 s)
+and, for the screen, the rigid damper. These are independent once a
+model's meshes exist, so :func:`prefetch` runs them first as tasks on a
+pool of worker processes (one per core by default), longest first, each
+writing its result to the study's cache as the sequential path would; the
+main process then finds every model in the cache and goes on unchanged.
+The results are the very files the sequential path writes (same code, same
+cache keys), so they do not depend on the number of workers.
+
+* ``UPD_WORKERS``: worker processes (default: the cores this process may
+  use); 1 turns the pool off. Under ``mpirun`` the pool is never used: the
+  ranks already share each reduction.
+* Memory: a reduction is only started when the estimated peaks of the
+  running ones plus its own (about 24 kB per DOF, measured: 2.3 GB for the
+  141k-DOF rig with its damper, 9.9 GB for 420k DOFs) fit in 80 % of the
+  memory available when the pool started; a reduction too large for that
+  runs alone.
+* A task that fails is logged and left to the main process, which computes
+  it again and reports the error as it always does. The workers die with
+  the main process (an interrupted run keeps what the finished tasks wrote).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import InputError
+
+log = logging.getLogger(__name__)
+
+BYTES_PER_DOF = 24e3  # peak memory of a reduction per DOF (measured, see above)
+MEMORY_SHARE = 0.8  # of MemAvailable at the start of the pool
+_POLL_S = 0.05
+
+
+def worker_count() -> int:
+    """Worker processes for the pool: ``UPD_WORKERS`` or the cores this process may use."""
+    raw = os.environ.get("UPD_WORKERS", "").strip()
+    if raw:
+        try:
+            n = int(raw)
+        except ValueError:
+            n = 0
+        if n < 1:
+            raise InputError("UPD_WORKERS", raw, "a whole number >= 1 (1: no worker pool)")
+        return n
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def available_memory() -> float:
+    """Bytes of MemAvailable (/proc/meminfo), or +inf where it cannot be read."""
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    return float("inf")
+
+
+@dataclass
+class Task:
+    """One unit of the pool: ``geometry`` of a model, or the reduction of one of its bodies."""
+
+    kind: str  # "geometry" | "rig" | "damper" | "damper-rigid"
+    case: Any  # a plan.Case (picklable)
+    n_dofs: int = 0  # known once the geometry exists (the reduction's memory estimate)
+    after: str = ""  # the model digest whose geometry must exist first ("" for none)
+    label: str = field(default="", compare=False)
+
+    @property
+    def memory(self) -> float:
+        return BYTES_PER_DOF * self.n_dofs
+
+    @property
+    def cost(self) -> float:
+        """Relative duration of the task and what waits for it, for longest-first.
+
+        The meshes come first (every reduction of the model waits for them), then
+        the rig reductions (about 20-30 s on the 9 mm rig), the dampers (5-7 s).
+        """
+        return {"geometry": 40.0, "rig": 30.0, "damper": 7.0, "damper-rigid": 0.3}[self.kind]
+
+
+def _model_label(case) -> str:
+    return case.damper + (f" [{case.variant}]" if case.variant else "")
+
+
+def _reductions(case, geom, out: Path, rigid_bound: bool, force: bool) -> list[Task]:
+    """The reduction tasks of a model whose geometry exists (none when all are cached)."""
+    from ..fe.reduce import cached_model
+
+    s = case.settings
+    fe_dir = out / "cache" / "fe"
+    want = [("rig", False), ("damper", bool(s["rigid-damper"]))]
+    if rigid_bound and not s["rigid-damper"]:
+        want.append(("damper", True))
+    tasks = []
+    for body, rigid in want:
+        if not force and cached_model(
+            geom, body, n_modes=s["modes"], rigid=rigid, cache_dir=fe_dir
+        ):
+            continue
+        n = int(geom.stats.get(f"{body}_n_nodes", 0)) * 3
+        kind = "damper-rigid" if rigid else body
+        tasks.append(Task(kind, case, n_dofs=n, label=f"{kind} of {_model_label(case)}"))
+    return tasks
+
+
+def plan_tasks(cases, out: Path, *, rigid_bound: bool, force: bool) -> list[Task]:
+    """The tasks still to do for the models of ``cases`` (cheap: no meshing, no FE)."""
+    from ..geometry.build import cached_geometry
+    from .runner import geometry_dir, geometry_request
+
+    models: dict[str, Any] = {}
+    for c in cases:
+        models.setdefault(c.model_digest, c)
+    tasks: list[Task] = []
+    for md, c in models.items():
+        req = geometry_request(c)
+        geom = cached_geometry(
+            req["damper"],
+            geometry_dir(c, out),
+            geometry_file=req["geometry_file"],
+            size_mm=req["size_mm"],
+            overrides=req["overrides"],
+        )
+        if geom is None:
+            tasks.append(Task("geometry", c, label=f"meshes of {_model_label(c)}"))
+            tasks.append(Task("reductions", c, after=md))  # expanded once the meshes exist
+        else:
+            tasks.extend(_reductions(c, geom, out, rigid_bound, force))
+    return tasks
+
+
+def run_task(kind: str, case, out: str, force: bool) -> tuple[float, dict]:
+    """Worker side: do one task (writes the cache); returns (seconds, geometry stats)."""
+    from ..fe.reduce import reduce_body
+    from .runner import load_geometry
+
+    t0 = time.perf_counter()
+    geom = load_geometry(case, Path(out))
+    if kind != "geometry":
+        s = case.settings
+        body = "rig" if kind == "rig" else "damper"
+        reduce_body(
+            geom,
+            body,
+            n_modes=s["modes"],
+            rigid=kind == "damper-rigid" or (body == "damper" and bool(s["rigid-damper"])),
+            cache_dir=Path(out) / "cache" / "fe",
+            force=force,
+        )
+    return time.perf_counter() - t0, dict(geom.stats)
+
+
+def _init_worker(level: int) -> None:
+    """Worker start-up: die with the parent, one thread, no progress bars, parent's log level."""
+    import ctypes
+    import signal
+
+    try:
+        ctypes.CDLL("libc.so.6").prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+    except OSError:  # pragma: no cover - not glibc
+        pass
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    logging.basicConfig(format="  [worker] %(levelname).1s %(name)s: %(message)s")
+    logging.getLogger("workbench").setLevel(max(level, logging.WARNING))
+    # the imports (about 2.5 s) while the main process meshes the first model
+    import dolfinx.fem.petsc  # noqa: F401
+    import gmsh  # noqa: F401
+
+    from ..fe import craig_bampton, reduce  # noqa: F401
+    from . import runner  # noqa: F401
+
+
+def prefetch(cases, out: str | Path, *, rigid_bound: bool = False, force: bool = False) -> dict:
+    """Mesh and reduce the models of ``cases`` on a pool of local workers (see the module).
+
+    ``rigid_bound``: also the rigid damper of each model (the screen's rig
+    bound). Returns ``{"workers", "tasks", "failed", "seconds", "task_seconds"}``
+    (``workers`` 0 when the pool was not used: mpirun, ``UPD_WORKERS=1``, or
+    fewer than two tasks).
+    """
+    from ..log import mpi_size, progress_bar
+
+    out = Path(out)
+    t_start = time.perf_counter()
+    res: dict[str, Any] = dict(workers=0, tasks=0, failed=[], seconds=0.0, task_seconds={})
+    if mpi_size() > 1:
+        return res
+    n_workers = worker_count()
+    tasks = plan_tasks(cases, out, rigid_bound=rigid_bound, force=force)
+    n_work = sum(1 for t in tasks if t.kind != "reductions")
+    if n_workers < 2 or n_work + 2 * sum(t.kind == "reductions" for t in tasks) < 2:
+        return res
+    import multiprocessing as mp
+
+    n_workers = min(n_workers, max(2, n_work))
+    env = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "UPD_NO_PROGRESS": "1"}
+    saved = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)  # spawned workers copy the environment when they start
+    try:
+        pool = mp.get_context("spawn").Pool(
+            n_workers, _init_worker, (logging.getLogger("workbench").getEffectiveLevel(),)
+        )
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    n_models = len({t.case.model_digest for t in tasks})
+    log.info("models: meshes and reductions of %d model(s) on %d worker processes",
+             n_models, n_workers)  # fmt: skip
+    sch = _Scheduler(pool, tasks, n_workers, MEMORY_SHARE * available_memory(), out, res)
+    sch.rigid_bound, sch.force = rigid_bound, force
+    try:
+        with progress_bar("models: meshes and reductions", total=n_work, unit="task") as bar:
+            sch.bar = bar
+            # the workers take a few seconds to start (imports): the main process meshes
+            # the first model meanwhile, the others are queued for the workers
+            first = next((t for t in sch.pending if t.kind == "geometry"), None)
+            if first is not None:
+                sch.pending.remove(first)
+            sch.start()
+            if first is not None:
+                sch.run_here(first)
+            while sch.pending or sch.running:
+                sch.collect()
+                sch.start()
+                time.sleep(_POLL_S)
+    except BaseException:
+        pool.terminate()  # Ctrl-C or an error in the parent: stop the workers at once
+        pool.join()
+        raise
+    pool.close()
+    pool.join()
+    res.update(workers=n_workers, tasks=sch.done, seconds=time.perf_counter() - t_start)
+    return res
+
+
+class _Scheduler:
+    """The pool's bookkeeping: pending and running tasks, results, the progress bar."""
+
+    def __init__(self, pool, tasks, n_workers: int, budget: float, out: Path, res: dict):
+        self.pool, self.pending, self.n_workers, self.budget = pool, list(tasks), n_workers, budget
+        self.out, self.res = out, res
+        self.running: dict[Any, Task] = {}
+        self.done = 0
+        self.bar = None
+        self.rigid_bound = self.force = False
+
+    def finish(self, t: Task, secs: float | None, err: BaseException | None = None) -> None:
+        """Record a finished task; a model's meshes release its reduction tasks."""
+        self.done += 1
+        self.bar.update(1)
+        md = t.case.model_digest
+        if err is not None:
+            log.warning("%s failed (%s); the main process retries it", t.label, err)
+            self.res["failed"].append(t.label)
+            if t.kind == "geometry":
+                self.pending = [p for p in self.pending if p.after != md]
+            return
+        self.res["task_seconds"][t.label] = round(secs, 2)
+        log.info("%s: %.1f s", t.label, secs)
+        if t.kind == "geometry":
+            self.pending = [p for p in self.pending if p.after != md]
+            self.pending += _expand(t.case, self.out, self.rigid_bound, self.force)
+            waiting = sum(p.kind != "reductions" for p in self.pending)
+            self.bar.total = self.done + len(self.running) + waiting
+
+    def collect(self) -> None:
+        for ar, t in list(self.running.items()):
+            if ar.ready():
+                del self.running[ar]
+                try:
+                    secs, _ = ar.get()
+                except Exception as e:  # noqa: BLE001 - left to the main process
+                    self.finish(t, None, e)
+                else:
+                    self.finish(t, secs)
+
+    def run_here(self, t: Task) -> None:
+        """Run a task in the main process (while the workers start)."""
+        try:
+            secs, _ = run_task(t.kind, t.case, str(self.out), self.force)
+        except Exception as e:  # noqa: BLE001 - the sequential path reports it again
+            self.finish(t, None, e)
+        else:
+            self.finish(t, secs)
+
+    def start(self) -> None:
+        """Start the longest pending tasks that may run (free worker, memory, dependencies)."""
+        ready = sorted((t for t in self.pending if t.kind != "reductions"), key=lambda t: -t.cost)
+        for t in ready:
+            if len(self.running) >= self.n_workers:
+                return
+            in_use = sum(r.memory for r in self.running.values())
+            if self.running and in_use + t.memory > self.budget:
+                continue  # waits for memory; a task too large for the budget runs alone
+            self.pending.remove(t)
+            ar = self.pool.apply_async(run_task, (t.kind, t.case, str(self.out), self.force))
+            self.running[ar] = t
+
+
+def _expand(case, out: Path, rigid_bound: bool, force: bool) -> list[Task]:
+    """The reduction tasks of a model whose meshes a worker just wrote."""
+    from .runner import load_geometry
+
+    return _reductions(case, load_geometry(case, out), out, rigid_bound, force)
+
+
+def prefetch_study(
+    cases, need_models: list[str], out: Path, force: bool, timings: dict, comm
+) -> set:
+    """:func:`prefetch` for the models ``need_models`` (digests) of a study's ``cases``.
+
+    Nothing under MPI (``comm`` not None).
+
+    Adds the pool's wall time to ``timings``; returns the models it recomputed
+    under ``force`` (the main process must not recompute them again).
+    """
+    if comm is not None or not need_models:
+        return set()
+    firsts = [next(x for x in cases if x.model_digest == md) for md in need_models]
+    pool = prefetch(firsts, out, rigid_bound=True, force=force)
+    if not pool["workers"]:
+        return set()
+    timings["models (worker pool)"] = pool["seconds"]
+    return set(need_models) if force and not pool["failed"] else set()
