@@ -57,6 +57,37 @@ def test_the_pool_writes_the_models_one_process_writes(tmp_path, monkeypatch):
                 assert np.array_equal(a[key][()], b[key][()]), (name, key)
 
 
+@pytest.mark.mpi
+def test_ranks_write_the_models_one_process_writes(tmp_path):
+    """Under mpirun each rank reduces whole models alone: the same files, bit for bit."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    from conftest import run_upd
+
+    serial = tmp_path / "serial"
+    assert run_upd("screen", TINY, "--out", serial).code == 0
+    par = tmp_path / "mpi"
+    cmd = [shutil.which("mpirun"), "-n", "2", "--allow-run-as-root", "--oversubscribe",
+           sys.executable, "-m", "workbench.cli.main", "screen", str(TINY), "--out", str(par),
+           "--json"]  # fmt: skip
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=600, env=dict(os.environ))
+    assert p.returncode == 0, p.stderr[-3000:]
+    pool = json.loads(p.stdout)["worker_pool"]
+    assert pool["workers"] == 2 and pool["tasks"] == 4 and pool["failed"] == []
+    files = sorted(f.name for f in (serial / "cache" / "fe").glob("*.h5"))
+    assert len(files) == 3 and files == sorted(f.name for f in (par / "cache" / "fe").glob("*.h5"))
+    for name in files:
+        with (
+            h5py.File(serial / "cache" / "fe" / name) as a,
+            h5py.File(par / "cache" / "fe" / name) as b,
+        ):
+            for key in ("K", "M"):
+                assert np.array_equal(a[key][()], b[key][()]), (name, key)
+
+
 def test_a_bad_worker_count_is_refused_with_its_name(tmp_path, monkeypatch):
     from conftest import run_upd
 

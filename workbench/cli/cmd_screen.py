@@ -28,9 +28,10 @@ The screen shares the study's FE cache (same --out): run it first to tune a
 rig or a damper in seconds per try (after the first reduction), then run
 `upd study` on the same file and folder, which reuses the reduced models.
 A k2/k of a few per cent cannot level a peak off, whatever mu and cf.
-Without mpirun, the meshes and reductions of all the models run at once on
-a pool of worker processes, one per core (UPD_WORKERS=N sets the number, 1
-turns it off); worker_pool in the output gives each task's seconds.
+The meshes and reductions of all the models run at once: under mpirun
+whole models per rank, else on a pool of worker processes, one per core
+(UPD_WORKERS=N sets the number, 1 turns it off); worker_pool in the output
+gives each task's seconds.
 
 Takes the same study file and options as `upd study` (only those that
 shape the linear model matter: dampers, phases, forces, geometry,

@@ -13,9 +13,10 @@ The study file's keys are the options below (without --); options given on
 the command line override the file. Finished cases are cached under a hash
 of their parameters in DIR/cache, so an interrupted study resumes where it
 stopped; --force recomputes. Under `mpirun -n N` the cases are spread over
-the ranks. Without mpirun the meshes and FE reductions of the models run
-at once on a pool of worker processes, one per core (UPD_WORKERS=N sets
-the number, 1 turns it off). The run ends with DIR/report.html.
+the ranks, and each rank meshes and reduces whole models alone. Without
+mpirun the meshes and FE reductions of the models run at once on a pool of
+worker processes, one per core (UPD_WORKERS=N sets the number, 1 turns it
+off). The run ends with DIR/report.html.
 
 examples:
   upd study studies/paper.toml --out results/paper

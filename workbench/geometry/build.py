@@ -64,6 +64,7 @@ def build_geometry(
     geometry_file: Path | None = None,
     size_mm: float | None = None,
     overrides: Mapping[str, Any] | None = None,
+    comm: Any = None,
 ) -> BuiltGeometry:
     """Mesh the rig and one damper seated in its groove; return the record.
 
@@ -76,6 +77,8 @@ def build_geometry(
     size_mm : the global element size of the rig, mm (``rig.mesh.size_mm``).
     overrides : nested dict with the same keys as the files, e.g.
         ``{"cone": {"semi_angle_deg": 12}}``.
+    comm : the ranks that build together (default: COMM_WORLD under mpirun);
+        ``MPI.COMM_SELF`` lets one rank build alone.
 
     Raises InputError (bad or non-fitting parameters, before gmsh runs) or
     SolveError (gmsh failed; ``partial`` holds what was built).
@@ -84,12 +87,12 @@ def build_geometry(
     lay = make_layout(gp)  # every rank checks, so every rank raises the same InputError
     dig = geometry_digest(gp)
     out_dir = Path(out_dir)
-    if mpi_size() > 1:
+    if comm is None and mpi_size() > 1:
         from mpi4py import MPI
 
         comm = MPI.COMM_WORLD
-        if comm.size > 1:
-            return _build_mpi(comm, lay, dig, out_dir)
+    if comm is not None and comm.size > 1:
+        return _build_mpi(comm, lay, dig, out_dir)
     return _build_or_reuse(lay, dig, out_dir)
 
 

@@ -1,4 +1,4 @@
-"""Mesh and reduce a study's models concurrently on the local cores (runs without mpirun).
+"""Mesh and reduce a study's models concurrently: local workers, or whole models per rank.
 
 Run without ``mpirun``, a study or a screen would build its models one
 after the other on one core: per damper the meshes (about 5 s on the 9 mm
@@ -12,8 +12,8 @@ The results are the very files the sequential path writes (same code, same
 cache keys), so they do not depend on the number of workers.
 
 * ``UPD_WORKERS``: worker processes (default: the cores this process may
-  use); 1 turns the pool off. Under ``mpirun`` the pool is never used: the
-  ranks already share each reduction.
+  use); 1 turns the pool off. Under ``mpirun`` there is no pool: each rank
+  takes whole models instead (:func:`prefetch_ranks`).
 * Memory: a reduction is only started when the estimated peaks of the
   running ones plus its own (about 24 kB per DOF, measured: 2.3 GB for the
   141k-DOF rig with its damper, 9.9 GB for 420k DOFs) fit in 80 % of the
@@ -121,22 +121,12 @@ def _reductions(case, geom, out: Path, rigid_bound: bool, force: bool) -> list[T
 
 def plan_tasks(cases, out: Path, *, rigid_bound: bool, force: bool) -> list[Task]:
     """The tasks still to do for the models of ``cases`` (cheap: no meshing, no FE)."""
-    from ..geometry.build import cached_geometry
-    from .runner import geometry_dir, geometry_request
-
     models: dict[str, Any] = {}
     for c in cases:
         models.setdefault(c.model_digest, c)
     tasks: list[Task] = []
     for md, c in models.items():
-        req = geometry_request(c)
-        geom = cached_geometry(
-            req["damper"],
-            geometry_dir(c, out),
-            geometry_file=req["geometry_file"],
-            size_mm=req["size_mm"],
-            overrides=req["overrides"],
-        )
+        geom = cached_geometry_of(c, out)
         if geom is None:
             tasks.append(Task("geometry", c, label=f"meshes of {_model_label(c)}"))
             tasks.append(Task("reductions", c, after=md))  # expanded once the meshes exist
@@ -145,13 +135,16 @@ def plan_tasks(cases, out: Path, *, rigid_bound: bool, force: bool) -> list[Task
     return tasks
 
 
-def run_task(kind: str, case, out: str, force: bool) -> tuple[float, dict]:
-    """Worker side: do one task (writes the cache); returns (seconds, geometry stats)."""
+def run_task(kind: str, case, out: str, force: bool, comm=None) -> tuple[float, dict]:
+    """Worker side: do one task (writes the cache); returns (seconds, geometry stats).
+
+    ``comm``: the ranks doing it (``MPI.COMM_SELF`` for a rank alone under mpirun).
+    """
     from ..fe.reduce import reduce_body
     from .runner import load_geometry
 
     t0 = time.perf_counter()
-    geom = load_geometry(case, Path(out))
+    geom = load_geometry(case, Path(out), comm)
     if kind != "geometry":
         s = case.settings
         body = "rig" if kind == "rig" else "damper"
@@ -161,6 +154,7 @@ def run_task(kind: str, case, out: str, force: bool) -> tuple[float, dict]:
             n_modes=s["modes"],
             rigid=kind == "damper-rigid" or (body == "damper" and bool(s["rigid-damper"])),
             cache_dir=Path(out) / "cache" / "fe",
+            comm=comm,
             force=force,
         )
     return time.perf_counter() - t0, dict(geom.stats)
@@ -317,27 +311,123 @@ class _Scheduler:
 
 
 def _expand(case, out: Path, rigid_bound: bool, force: bool) -> list[Task]:
-    """The reduction tasks of a model whose meshes a worker just wrote."""
-    from .runner import load_geometry
-
-    return _reductions(case, load_geometry(case, out), out, rigid_bound, force)
+    """The reduction tasks of a model whose meshes were just written (none if they were not)."""
+    geom = cached_geometry_of(case, out)  # read only: no collective build under mpirun
+    return [] if geom is None else _reductions(case, geom, out, rigid_bound, force)
 
 
 def prefetch_study(
     cases, need_models: list[str], out: Path, force: bool, timings: dict, comm
 ) -> set:
-    """:func:`prefetch` for the models ``need_models`` (digests) of a study's ``cases``.
-
-    Nothing under MPI (``comm`` not None).
+    """:func:`prefetch` (:func:`prefetch_ranks` under MPI, ``comm`` not None) for the
+    models ``need_models`` (digests) of a study's ``cases``.
 
     Adds the pool's wall time to ``timings``; returns the models it recomputed
     under ``force`` (the main process must not recompute them again).
     """
-    if comm is not None or not need_models:
+    if not need_models:
         return set()
     firsts = [next(x for x in cases if x.model_digest == md) for md in need_models]
-    pool = prefetch(firsts, out, rigid_bound=True, force=force)
+    if comm is not None:
+        pool = prefetch_ranks(firsts, out, comm, rigid_bound=True, force=force)
+    else:
+        pool = prefetch(firsts, out, rigid_bound=True, force=force)
     if not pool["workers"]:
         return set()
     timings["models (worker pool)"] = pool["seconds"]
     return set(need_models) if force and not pool["failed"] else set()
+
+
+def prefetch_ranks(cases, out, comm, *, rigid_bound: bool = False, force: bool = False) -> dict:
+    """Under mpirun: each rank meshes and reduces whole models alone (``COMM_SELF``).
+
+    MUMPS shares one factorisation badly between ranks (its distributed
+    solves were no faster on two ranks than on one), while independent
+    models keep every rank busy; the files are those one process writes.
+    Two collective phases: the meshes (round robin), then the reductions
+    (longest first to the least loaded rank). Skipped with fewer than two
+    tasks, or when the largest reductions would not fit in memory side by
+    side (the ranks then reduce each model together, as before). Failures
+    are left to the collective path. Collective; returns what
+    :func:`prefetch` does.
+    """
+    import dolfinx  # noqa: F401 - PETSc's collective start-up before any rank works alone
+    from mpi4py import MPI
+
+    out = Path(out)
+    t_start = time.perf_counter()
+    res: dict[str, Any] = dict(workers=0, tasks=0, failed=[], seconds=0.0, task_seconds={})
+    tasks = plan_tasks(cases, out, rigid_bound=rigid_bound, force=force) if comm.rank == 0 else None
+    tasks = comm.bcast(tasks, root=0)
+    geo = [t for t in tasks if t.kind == "geometry"]
+    if comm.size < 2 or len(tasks) + len(geo) < 2:
+        return res
+    done: list[tuple[str, float | None, str]] = []
+
+    def run(ts):
+        for t in ts:
+            try:
+                secs, _ = run_task(t.kind, t.case, str(out), force, MPI.COMM_SELF)
+                done.append((t.label, secs, ""))
+            except Exception as e:  # noqa: BLE001 - the collective path reports it again
+                done.append((t.label, None, f"{type(e).__name__}: {e}"))
+
+    run(geo[comm.rank :: comm.size])
+    meshed = comm.allgather([lbl for lbl, secs, _ in done if secs is not None])
+    comm.Barrier()
+    plan = None
+    if comm.rank == 0:
+        ok = {lbl for part in meshed for lbl in part}
+        red = [t for t in tasks if t.kind not in ("geometry", "reductions")]
+        for t in geo:  # the models meshed just now, by any rank: their reductions
+            if t.label in ok:
+                red += _expand(t.case, out, rigid_bound, force)
+        plan = _assign(red, comm.size, MEMORY_SHARE * available_memory())
+        if plan is None:
+            log.info("models: the largest reductions do not fit in memory side by side; "
+                     "the ranks reduce each model together")  # fmt: skip
+    plan = comm.bcast(plan, root=0)
+    if plan is not None:
+        run(plan[comm.rank])
+    comm.Barrier()
+    everything = comm.gather(done, root=0)
+    if comm.rank == 0:
+        for lbl, secs, err in (x for part in everything for x in part):
+            if secs is None:
+                log.warning("%s failed on its rank (%s); all ranks retry it together", lbl, err)
+                res["failed"].append(lbl)
+            else:
+                res["task_seconds"][lbl] = round(secs, 2)
+    res = comm.bcast(res, root=0)
+    res.update(workers=comm.size, tasks=len(geo) + sum(len(p) for p in (plan or [])))
+    res["seconds"] = time.perf_counter() - t_start
+    return res
+
+
+def cached_geometry_of(case, out: Path):
+    """The finished geometry record of a case's model, or None (no meshing)."""
+    from ..geometry.build import cached_geometry
+    from .runner import geometry_dir, geometry_request
+
+    req = geometry_request(case)
+    return cached_geometry(
+        req["damper"],
+        geometry_dir(case, out),
+        geometry_file=req["geometry_file"],
+        size_mm=req["size_mm"],
+        overrides=req["overrides"],
+    )
+
+
+def _assign(tasks: list[Task], n_ranks: int, budget: float) -> list[list[Task]] | None:
+    """Tasks per rank, longest first to the least loaded; None when memory forbids it."""
+    biggest = sorted((t.memory for t in tasks), reverse=True)[:n_ranks]
+    if len(biggest) > 1 and sum(biggest) > budget:
+        return None
+    load = [0.0] * n_ranks
+    plan: list[list[Task]] = [[] for _ in range(n_ranks)]
+    for t in sorted(tasks, key=lambda t: -t.cost * max(t.n_dofs, 1)):
+        r = min(range(n_ranks), key=load.__getitem__)
+        plan[r].append(t)
+        load[r] += t.cost * max(t.n_dofs, 1)
+    return plan

@@ -16,9 +16,9 @@ A run killed at any moment leaves only whole files behind (every write is
 atomic), so running it again recomputes only the unfinished cases.
 ``force=True`` recomputes everything.
 
-MPI: geometry and reduction on all ranks together (dolfinx; without mpirun
-a pool of local workers, :mod:`.prefetch`), then the cases spread over the
-ranks; rank 0 gathers the case files, writes the results and the report.
+Models first (:mod:`.prefetch`: whole models per rank under MPI, else a
+pool of local workers), then the cases spread over the ranks; rank 0
+gathers the case files, writes the results and the report.
 The answers do not depend on the number of ranks or workers.
 
 The files a finished study writes (results, tables, report) are written by
@@ -217,7 +217,7 @@ def geometry_dir(case: Case, out: Path) -> Path:
     return out / "cache" / "geometry" / f"{case.damper}-{digest(geometry_request(case), 10)}"
 
 
-def load_geometry(case: Case, out: Path):
+def load_geometry(case: Case, out: Path, comm=None):
     """The case's BuiltGeometry (built once, then read from its cache folder)."""
     from ..geometry import build_geometry
 
@@ -228,6 +228,7 @@ def load_geometry(case: Case, out: Path):
         geometry_file=req["geometry_file"],
         size_mm=req["size_mm"],
         overrides=req["overrides"],
+        comm=comm,
     )
 
 

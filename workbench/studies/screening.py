@@ -135,10 +135,10 @@ def study_screens(
 def run_screen(spec: StudySpec, out: str | Path, *, comm=None) -> dict[str, Any]:
     """Screen every model of ``spec``: rows (one per model and phase) and timings.
 
-    Without mpirun the meshes and reductions of all models are first computed
-    concurrently on the local cores (:mod:`.prefetch`); ``timings`` then holds
-    what each model cost the main process afterwards and ``pool`` the pool's
-    figures (workers, wall seconds, seconds per task).
+    The meshes and reductions of all models are first computed concurrently
+    (:mod:`.prefetch`: local workers, or under mpirun whole models per rank);
+    ``timings`` then holds what each model cost afterwards and ``pool`` the
+    pool's figures (workers, wall seconds, seconds per task).
     """
     from ..log import progress_bar
     from .runner import prepare_model
@@ -151,11 +151,13 @@ def run_screen(spec: StudySpec, out: str | Path, *, comm=None) -> dict[str, Any]
     f_max = max(spec.forces)
     rows: list[dict[str, Any]] = []
     timings: dict[str, float] = {}
-    pool: dict[str, Any] = {"workers": 0}
-    if comm is None:  # meshes and reductions of every model at once on the local cores
-        from .prefetch import prefetch
+    # meshes and reductions of every model at once: local workers, or one model per rank
+    from .prefetch import prefetch, prefetch_ranks
 
+    if comm is None:
         pool = prefetch(list(models.values()), out, rigid_bound=True)
+    else:
+        pool = prefetch_ranks(list(models.values()), out, comm, rigid_bound=True)
     with progress_bar("screen: models", total=len(models), unit="model") as bar:
         for c in models.values():
             t0 = time.perf_counter()
