@@ -334,7 +334,7 @@ def prefetch_study(
         pool = prefetch(firsts, out, rigid_bound=True, force=force)
     if not pool["workers"]:
         return set()
-    timings["models (worker pool)"] = pool["seconds"]
+    timings["models (concurrent)"] = pool["seconds"]
     return set(need_models) if force and not pool["failed"] else set()
 
 
