@@ -250,3 +250,42 @@ def test_killed_main_process_takes_its_workers_and_keeps_finished_models(tmp_pat
     for name in finished:  # written by a worker of the killed run, reused as it is
         assert f"reusing {fe / name}" in r.err, name
     assert r.json["worker_pool"]["failed"] == []
+
+
+def test_a_worker_killed_mid_run_leaves_its_work_to_the_main_process(tmp_path):
+    """The out-of-memory killer's case: a worker dies with its task; multiprocessing would
+    wait for that result forever. The pool notices, stops, and the main process finishes
+    (same exit code and the same models as an undisturbed run)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "hit"
+    env = dict(os.environ, UPD_WORKERS="2")
+    cmd = [sys.executable, "-m", "workbench.cli.main", "screen", str(TINY), "--out", str(out),
+           "--json"]  # fmt: skip
+    p = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    victim = None
+    t0 = time.time()
+    while victim is None and time.time() - t0 < 300 and p.poll() is None:
+        if any((out / "cache" / "geometry").glob("*/geometry.h5")):  # reductions under way
+            for pid in _children(p.pid):
+                try:
+                    cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
+                except OSError:
+                    continue
+                if b"spawn_main" in cmdline:
+                    victim = pid
+                    break
+        time.sleep(0.05)
+    assert victim is not None, "no worker found while the reductions ran"
+    os.kill(victim, signal.SIGKILL)
+    stdout, stderr = p.communicate(timeout=600)
+    assert p.returncode == 0, stderr[-3000:]
+    assert "a worker process died" in stderr
+    res = json.loads(stdout)
+    assert res["worker_pool"]["failed"], res["worker_pool"]
+    assert len(list((out / "cache" / "fe").glob("*.h5"))) == 3
+    assert len(json.loads((out / "screen.json").read_text())) == 1  # one model, one phase

@@ -20,7 +20,8 @@ cache keys), so they do not depend on the number of workers.
   memory available when the pool started; a reduction too large for that
   runs alone.
 * A task that fails is logged and left to the main process, which computes
-  it again and reports the error as it always does. The workers die with
+  it again and reports the error as it always does; so is all that is left
+  when a worker process dies (out-of-memory killer). The workers die with
   the main process (an interrupted run keeps what the finished tasks wrote).
 """
 
@@ -234,13 +235,18 @@ def prefetch(cases, out: str | Path, *, rigid_bound: bool = False, force: bool =
                 sch.run_here(first)
             while sch.pending or sch.running:
                 sch.collect()
+                if sch.abandon_if_a_worker_died():
+                    break
                 sch.start()
                 time.sleep(_POLL_S)
     except BaseException:
         pool.terminate()  # Ctrl-C or an error in the parent: stop the workers at once
         pool.join()
         raise
-    pool.close()
+    if sch.abandoned:
+        pool.terminate()
+    else:
+        pool.close()
     pool.join()
     res.update(workers=n_workers, tasks=sch.done, seconds=time.perf_counter() - t_start)
     return res
@@ -253,6 +259,8 @@ class _Scheduler:
         self.pool, self.pending, self.n_workers, self.budget = pool, list(tasks), n_workers, budget
         self.out, self.res = out, res
         self.running: dict[Any, Task] = {}
+        self.procs: dict[int, Any] = {}  # every worker process seen (pid -> Process)
+        self.abandoned = False
         self.done = 0
         self.bar = None
         self.rigid_bound = self.force = False
@@ -275,6 +283,38 @@ class _Scheduler:
             self.pending += _expand(t.case, self.out, self.rigid_bound, self.force)
             waiting = sum(p.kind != "reductions" for p in self.pending)
             self.bar.total = self.done + len(self.running) + waiting
+
+    def dead_worker(self) -> str:
+        """``"pid N, exit code C"`` of a worker that exited while the pool runs, else "".
+
+        A pool worker only exits when the pool is closed; one that died (killed
+        by the out-of-memory killer, a crash in a library) took its task with
+        it, and multiprocessing would wait for that task's result forever.
+        """
+        for p in getattr(self.pool, "_pool", []):
+            self.procs.setdefault(p.pid, p)
+        for pid, p in self.procs.items():
+            if p.exitcode is not None:
+                return f"pid {pid}, exit code {p.exitcode}"
+        return ""
+
+    def abandon_if_a_worker_died(self) -> bool:
+        """After a worker's death, list what is unfinished as failed (the main process
+        does it) and return True."""
+        dead = self.dead_worker()
+        if not dead:
+            return False
+        left = [t.label for t in self.running.values()]
+        left += [t.label for t in self.pending if t.kind != "reductions"]
+        log.warning(
+            "a worker process died (%s); the main process does the %d unfinished task(s) "
+            "and the reductions still waiting for meshes",
+            dead,
+            len(left),
+        )
+        self.res["failed"] += left
+        self.abandoned = True
+        return True
 
     def collect(self) -> None:
         for ar, t in list(self.running.items()):
