@@ -450,13 +450,7 @@ def cached_geometry_of(case, out: Path):
     from .runner import geometry_dir, geometry_request
 
     req = geometry_request(case)
-    return cached_geometry(
-        req["damper"],
-        geometry_dir(case, out),
-        geometry_file=req["geometry_file"],
-        size_mm=req["size_mm"],
-        overrides=req["overrides"],
-    )
+    return cached_geometry(req.pop("damper"), geometry_dir(case, out), **req)
 
 
 def _assign(tasks: list[Task], n_ranks: int, budget: float) -> list[list[Task]] | None:
