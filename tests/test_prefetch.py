@@ -109,14 +109,14 @@ class FakeCase:
     variant: str = ""
 
 
-class FakeResult:
+class FakeFuture:
     def __init__(self, value=None, error=None):
-        self.value, self.error, self.done = value, error, False
+        self.value, self.error, self.finished = value, error, False
 
-    def ready(self):
-        return self.done
+    def done(self):
+        return self.finished
 
-    def get(self):
+    def result(self):
         if self.error is not None:
             raise self.error
         return self.value
@@ -126,10 +126,10 @@ class FakePool:
     def __init__(self):
         self.started: list[tuple] = []
 
-    def apply_async(self, fn, args):
-        r = FakeResult(value=(1.0, {}))
-        self.started.append((args[0], args[1].model_digest, r))
-        return r
+    def submit(self, fn, *args):
+        f = FakeFuture(value=(1.0, {}))
+        self.started.append((args[0], args[1].model_digest, f))
+        return f
 
 
 class FakeBar:
@@ -170,22 +170,62 @@ def test_a_task_larger_than_the_budget_runs_alone():
     sch = scheduler(tasks, budget=1e6)
     sch.start()
     assert [s[1] for s in sch.pool.started] == ["big"]  # alone, though over the budget
-    sch.pool.started[0][2].done = True
+    sch.pool.started[0][2].finished = True
     sch.collect()
     sch.start()
     assert [s[1] for s in sch.pool.started] == ["big", "small"]
 
 
-def test_a_failed_mesh_leaves_its_model_to_the_main_process():
-    c = FakeCase("c")
-    tasks = [Task("geometry", c, label="meshes c"), Task("reductions", c, after="c")]
+def test_a_failed_mesh_leaves_its_models_to_the_main_process():
+    c, d = FakeCase("c"), FakeCase("d")  # two models on the same meshes (a sweep of mu)
+    tasks = [
+        Task("geometry", c, label="meshes c", key="geometry:g"),
+        Task("reductions", c, after="geometry:g"),
+        Task("reductions", d, after="geometry:g"),
+    ]
     sch = scheduler(tasks, budget=1e9)
     sch.start()
+    assert len(sch.pool.started) == 1  # the placeholders are never sent to a worker
     r = sch.pool.started[0][2]
-    r.error, r.done = RuntimeError("gmsh said no"), True
+    r.error, r.finished = RuntimeError("gmsh said no"), True
     sch.collect()
     assert sch.res["failed"] == ["meshes c"]
-    assert sch.pending == [] and sch.running == {}  # its reductions are not attempted
+    assert sch.pending == [] and sch.running == {}  # neither model's reductions attempted
+
+
+def test_a_task_error_survives_the_trip_back_from_a_worker(monkeypatch):
+    """The pool pickles a task's exception; ours cannot be rebuilt from a pickle (it
+    would come back as a broken pool), so the worker sends a RuntimeError that carries
+    the message."""
+    import pickle
+
+    import workbench.studies.prefetch as pf
+
+    def boom(*args):
+        raise InputError("points-per-line", 1, "a whole number >= 2")
+
+    monkeypatch.setattr(pf, "run_task", boom)
+    with pytest.raises(RuntimeError) as info:
+        pf._in_worker("rig", None, ".", False)
+    back = pickle.loads(pickle.dumps(info.value))
+    assert "InputError" in str(back) and "points-per-line = 1" in str(back)
+    with pytest.raises(TypeError):  # why: the original does not survive the trip
+        pickle.loads(pickle.dumps(InputError("points-per-line", 1, "a whole number >= 2")))
+
+
+def test_an_error_while_planning_on_rank_0_is_raised_on_every_rank():
+    """Under mpirun rank 0 plans alone; its error must reach the other ranks, which would
+    otherwise wait in the next collective forever."""
+    from workbench.studies.prefetch import _on_root
+
+    class Comm:  # what rank 1 sees: rank 0's broadcast
+        rank = 1
+
+        def bcast(self, obj, root=0):
+            return (None, ("input", ("cone-angle", 80.0, "0 < cone-angle < 45", "")))
+
+    with pytest.raises(InputError, match="cone-angle = 80.0"):
+        _on_root(Comm(), lambda: None)
 
 
 def _children(pid: int) -> set[int]:
@@ -253,9 +293,9 @@ def test_killed_main_process_takes_its_workers_and_keeps_finished_models(tmp_pat
 
 
 def test_a_worker_killed_mid_run_leaves_its_work_to_the_main_process(tmp_path):
-    """The out-of-memory killer's case: a worker dies with its task; multiprocessing would
-    wait for that result forever. The pool notices, stops, and the main process finishes
-    (same exit code and the same models as an undisturbed run)."""
+    """The out-of-memory killer's case: a worker dies, busy or waiting for work (then
+    holding the task queue's lock: multiprocessing.Pool hung there). The pool notices,
+    stops, and the main process finishes (exit 0, the three models)."""
     import os
     import signal
     import subprocess

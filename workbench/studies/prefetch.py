@@ -78,8 +78,9 @@ class Task:
     kind: str  # "geometry" | "rig" | "damper" | "damper-rigid"
     case: Any  # a plan.Case (picklable)
     n_dofs: int = 0  # known once the geometry exists (the reduction's memory estimate)
-    after: str = ""  # the model digest whose geometry must exist first ("" for none)
+    after: str = ""  # the key of the meshes this placeholder waits for ("" for none)
     label: str = field(default="", compare=False)
+    key: str = ""  # what the task writes: models sharing meshes or a reduction share it
 
     @property
     def memory(self) -> float:
@@ -101,7 +102,8 @@ def _model_label(case) -> str:
 
 def _reductions(case, geom, out: Path, rigid_bound: bool, force: bool) -> list[Task]:
     """The reduction tasks of a model whose geometry exists (none when all are cached)."""
-    from ..fe.reduce import cached_model
+    from ..fe.reduce import model_digest, model_path
+    from ..reduced import ReducedModel
 
     s = case.settings
     fe_dir = out / "cache" / "fe"
@@ -110,29 +112,52 @@ def _reductions(case, geom, out: Path, rigid_bound: bool, force: bool) -> list[T
         want.append(("damper", True))
     tasks = []
     for body, rigid in want:
-        if not force and cached_model(
-            geom, body, n_modes=s["modes"], rigid=rigid, cache_dir=fe_dir
-        ):
-            continue
+        inputs, dig = model_digest(geom, body, s["modes"], rigid)
+        path = model_path(fe_dir, inputs, dig)
+        if not force and ReducedModel.peek_digest(path) == dig:
+            continue  # cached
         n = int(geom.stats.get(f"{body}_n_nodes", 0)) * 3
         kind = "damper-rigid" if rigid else body
-        tasks.append(Task(kind, case, n_dofs=n, label=f"{kind} of {_model_label(case)}"))
+        label = f"{kind} of {_model_label(case)}"
+        tasks.append(Task(kind, case, n_dofs=n, label=label, key=f"fe:{path.name}"))
     return tasks
 
 
-def plan_tasks(cases, out: Path, *, rigid_bound: bool, force: bool) -> list[Task]:
-    """The tasks still to do for the models of ``cases`` (cheap: no meshing, no FE)."""
+def _unique(tasks: list[Task], seen: set[str]) -> list[Task]:
+    """``tasks`` without those whose key is in ``seen`` (which gets the new keys)."""
+    out = []
+    for t in tasks:
+        if t.key and t.key in seen:
+            continue
+        seen.add(t.key)
+        out.append(t)
+    return out
+
+
+def plan_tasks(
+    cases, out: Path, *, rigid_bound: bool, force: bool, seen: set[str] | None = None
+) -> list[Task]:
+    """The tasks still to do for the models of ``cases`` (cheap: no meshing, no FE).
+
+    Models that share their meshes (a sweep of mu or CF) or a reduced body
+    share the task; ``seen`` collects the keys planned.
+    """
+    from .runner import geometry_dir
+
+    seen = set() if seen is None else seen
     models: dict[str, Any] = {}
     for c in cases:
         models.setdefault(c.model_digest, c)
     tasks: list[Task] = []
-    for md, c in models.items():
+    for c in models.values():
         geom = cached_geometry_of(c, out)
         if geom is None:
-            tasks.append(Task("geometry", c, label=f"meshes of {_model_label(c)}"))
-            tasks.append(Task("reductions", c, after=md))  # expanded once the meshes exist
+            gkey = f"geometry:{geometry_dir(c, out)}"
+            tasks += _unique([Task("geometry", c, label=f"meshes of {_model_label(c)}",
+                                   key=gkey)], seen)  # fmt: skip
+            tasks.append(Task("reductions", c, after=gkey))  # expanded once the meshes exist
         else:
-            tasks.extend(_reductions(c, geom, out, rigid_bound, force))
+            tasks += _unique(_reductions(c, geom, out, rigid_bound, force), seen)
     return tasks
 
 
@@ -159,6 +184,28 @@ def run_task(kind: str, case, out: str, force: bool, comm=None) -> tuple[float, 
             force=force,
         )
     return time.perf_counter() - t0, dict(geom.stats)
+
+
+def _stop(pool) -> None:
+    """Stop an executor now: cancel what has not started, kill the workers."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        if p.exitcode is None:
+            p.kill()
+
+
+def _in_worker(kind: str, case, out: str, force: bool) -> tuple[float, dict]:
+    """:func:`run_task` in a pool worker; its errors come back as RuntimeError.
+
+    The pool pickles a task's exception to send it back, and our errors
+    (InputError: parameter, value, allowed range) cannot be rebuilt from a
+    pickle: the task would come back as a broken pool, not as its error.
+    """
+    try:
+        return run_task(kind, case, out, force)
+    except Exception as e:  # noqa: BLE001 - reported by the main process
+        raise RuntimeError(f"{type(e).__name__}: {e}") from None
 
 
 def _init_worker(level: int) -> None:
@@ -202,15 +249,24 @@ def prefetch(cases, out: str | Path, *, rigid_bound: bool = False, force: bool =
     if n_workers < 2 or n_work + 2 * sum(t.kind == "reductions" for t in tasks) < 2:
         return res
     import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor
 
     n_workers = min(n_workers, max(2, n_work))
     env = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "UPD_NO_PROGRESS": "1"}
     saved = {k: os.environ.get(k) for k in env}
     os.environ.update(env)  # spawned workers copy the environment when they start
     try:
-        pool = mp.get_context("spawn").Pool(
-            n_workers, _init_worker, (logging.getLogger("workbench").getEffectiveLevel(),)
+        # concurrent.futures, not multiprocessing.Pool: a worker that dies (out-of-memory
+        # killer) breaks the executor and every future says so; a Pool loses the task and,
+        # if the worker died waiting for work, holding its queue's lock, hangs on terminate
+        pool = ProcessPoolExecutor(
+            n_workers,
+            mp_context=mp.get_context("spawn"),
+            initializer=_init_worker,
+            initargs=(logging.getLogger("workbench").getEffectiveLevel(),),
         )
+        for _ in range(n_workers):  # start every worker now, with this environment
+            pool.submit(int)
     finally:
         for k, v in saved.items():
             if v is None:
@@ -233,21 +289,17 @@ def prefetch(cases, out: str | Path, *, rigid_bound: bool = False, force: bool =
             sch.start()
             if first is not None:
                 sch.run_here(first)
-            while sch.pending or sch.running:
+            while (sch.pending or sch.running) and not sch.abandoned:
                 sch.collect()
-                if sch.abandon_if_a_worker_died():
-                    break
                 sch.start()
                 time.sleep(_POLL_S)
     except BaseException:
-        pool.terminate()  # Ctrl-C or an error in the parent: stop the workers at once
-        pool.join()
+        _stop(pool)  # Ctrl-C or an error in the parent: stop the workers at once
         raise
     if sch.abandoned:
-        pool.terminate()
+        _stop(pool)
     else:
-        pool.close()
-    pool.join()
+        pool.shutdown(wait=True)
     res.update(workers=n_workers, tasks=sch.done, seconds=time.perf_counter() - t_start)
     return res
 
@@ -259,7 +311,7 @@ class _Scheduler:
         self.pool, self.pending, self.n_workers, self.budget = pool, list(tasks), n_workers, budget
         self.out, self.res = out, res
         self.running: dict[Any, Task] = {}
-        self.procs: dict[int, Any] = {}  # every worker process seen (pid -> Process)
+        self.seen: set[str] = {t.key for t in tasks if t.key}
         self.abandoned = False
         self.done = 0
         self.bar = None
@@ -269,59 +321,49 @@ class _Scheduler:
         """Record a finished task; a model's meshes release its reduction tasks."""
         self.done += 1
         self.bar.update(1)
-        md = t.case.model_digest
+        waiting_for_it = [p for p in self.pending if t.key and p.after == t.key]
+        self.pending = [p for p in self.pending if p not in waiting_for_it]
         if err is not None:
             log.warning("%s failed (%s); the main process retries it", t.label, err)
             self.res["failed"].append(t.label)
-            if t.kind == "geometry":
-                self.pending = [p for p in self.pending if p.after != md]
             return
         self.res["task_seconds"][t.label] = round(secs, 2)
         log.info("%s: %.1f s", t.label, secs)
-        if t.kind == "geometry":
-            self.pending = [p for p in self.pending if p.after != md]
-            self.pending += _expand(t.case, self.out, self.rigid_bound, self.force)
+        if t.kind == "geometry":  # the reductions of every model on these meshes
+            for p in waiting_for_it:
+                self.pending += _unique(
+                    _expand(p.case, self.out, self.rigid_bound, self.force), self.seen
+                )
             waiting = sum(p.kind != "reductions" for p in self.pending)
             self.bar.total = self.done + len(self.running) + waiting
 
-    def dead_worker(self) -> str:
-        """``"pid N, exit code C"`` of a worker that exited while the pool runs, else "".
-
-        A pool worker only exits when the pool is closed; one that died (killed
-        by the out-of-memory killer, a crash in a library) took its task with
-        it, and multiprocessing would wait for that task's result forever.
-        """
-        for p in getattr(self.pool, "_pool", []):
-            self.procs.setdefault(p.pid, p)
-        for pid, p in self.procs.items():
-            if p.exitcode is not None:
-                return f"pid {pid}, exit code {p.exitcode}"
-        return ""
-
-    def abandon_if_a_worker_died(self) -> bool:
-        """After a worker's death, list what is unfinished as failed (the main process
-        does it) and return True."""
-        dead = self.dead_worker()
-        if not dead:
-            return False
+    def abandon(self, why: str) -> None:
+        """A worker died: list what is unfinished as failed (the main process does it)."""
         left = [t.label for t in self.running.values()]
         left += [t.label for t in self.pending if t.kind != "reductions"]
         log.warning(
             "a worker process died (%s); the main process does the %d unfinished task(s) "
             "and the reductions still waiting for meshes",
-            dead,
+            why,
             len(left),
         )
         self.res["failed"] += left
+        self.running.clear()
+        self.pending.clear()
         self.abandoned = True
-        return True
 
     def collect(self) -> None:
-        for ar, t in list(self.running.items()):
-            if ar.ready():
-                del self.running[ar]
+        from concurrent.futures.process import BrokenProcessPool
+
+        for fut, t in list(self.running.items()):
+            if fut.done():
+                del self.running[fut]
                 try:
-                    secs, _ = ar.get()
+                    secs, _ = fut.result()
+                except BrokenProcessPool as e:
+                    self.running[fut] = t  # unfinished: listed by abandon()
+                    self.abandon(str(e) or "the process pool broke")
+                    return
                 except Exception as e:  # noqa: BLE001 - left to the main process
                     self.finish(t, None, e)
                 else:
@@ -346,8 +388,8 @@ class _Scheduler:
             if self.running and in_use + t.memory > self.budget:
                 continue  # waits for memory; a task too large for the budget runs alone
             self.pending.remove(t)
-            ar = self.pool.apply_async(run_task, (t.kind, t.case, str(self.out), self.force))
-            self.running[ar] = t
+            fut = self.pool.submit(_in_worker, t.kind, t.case, str(self.out), self.force)
+            self.running[fut] = t
 
 
 def _expand(case, out: Path, rigid_bound: bool, force: bool) -> list[Task]:
@@ -397,8 +439,9 @@ def prefetch_ranks(cases, out, comm, *, rigid_bound: bool = False, force: bool =
     out = Path(out)
     t_start = time.perf_counter()
     res: dict[str, Any] = dict(workers=0, tasks=0, failed=[], seconds=0.0, task_seconds={})
-    tasks = plan_tasks(cases, out, rigid_bound=rigid_bound, force=force) if comm.rank == 0 else None
-    tasks = comm.bcast(tasks, root=0)
+    seen: set[str] = set()
+    tasks = _on_root(comm, lambda: plan_tasks(cases, out, rigid_bound=rigid_bound, force=force,
+                                              seen=seen))  # fmt: skip
     geo = [t for t in tasks if t.kind == "geometry"]
     if comm.size < 2 or len(tasks) + len(geo) < 2:
         return res
@@ -412,24 +455,25 @@ def prefetch_ranks(cases, out, comm, *, rigid_bound: bool = False, force: bool =
             except Exception as e:  # noqa: BLE001 - the collective path reports it again
                 done.append((t.label, None, f"{type(e).__name__}: {e}"))
 
-    run(geo[comm.rank :: comm.size])
-    meshed = comm.allgather([lbl for lbl, secs, _ in done if secs is not None])
-    comm.Barrier()
-    plan = None
-    if comm.rank == 0:
-        ok = {lbl for part in meshed for lbl in part}
+    mine = geo[comm.rank :: comm.size]
+    run(mine)
+    ok = {t.key for t, (_, secs, _) in zip(mine, done, strict=True) if secs is not None}
+    meshed = set().union(*comm.allgather(ok))
+
+    def reductions():
         red = [t for t in tasks if t.kind not in ("geometry", "reductions")]
-        for t in geo:  # the models meshed just now, by any rank: their reductions
-            if t.label in ok:
-                red += _expand(t.case, out, rigid_bound, force)
+        for p in tasks:  # the models on meshes made just now, by any rank
+            if p.kind == "reductions" and p.after in meshed:
+                red += _unique(_expand(p.case, out, rigid_bound, force), seen)
         plan = _assign(red, comm.size, MEMORY_SHARE * available_memory())
         if plan is None:
             log.info("models: the largest reductions do not fit in memory side by side; "
                      "the ranks reduce each model together")  # fmt: skip
-    plan = comm.bcast(plan, root=0)
+        return plan
+
+    plan = _on_root(comm, reductions)
     if plan is not None:
         run(plan[comm.rank])
-    comm.Barrier()
     everything = comm.gather(done, root=0)
     if comm.rank == 0:
         for lbl, secs, err in (x for part in everything for x in part):
@@ -439,9 +483,36 @@ def prefetch_ranks(cases, out, comm, *, rigid_bound: bool = False, force: bool =
             else:
                 res["task_seconds"][lbl] = round(secs, 2)
     res = comm.bcast(res, root=0)
-    res.update(workers=comm.size, tasks=len(geo) + sum(len(p) for p in (plan or [])))
+    # no reductions done here (memory): nothing was refreshed, the collective path does it all
+    res.update(workers=comm.size if plan is not None else 0)
+    res.update(tasks=len(geo) + sum(len(p) for p in (plan or [])))
     res["seconds"] = time.perf_counter() - t_start
     return res
+
+
+def _on_root(comm, fn):
+    """``fn()`` on rank 0, its result on every rank; an error there is raised on every rank
+    (a rank that raised alone would leave the others waiting in the next collective)."""
+    from ..errors import WorkbenchError
+
+    out, err = None, None
+    if comm.rank == 0:
+        try:
+            out = fn()
+        except InputError as e:
+            err = ("input", (e.param, e.value, e.allowed, e.why))
+        except WorkbenchError as e:
+            err = ("other", str(e))
+        except Exception as e:  # noqa: BLE001 - re-raised below on every rank
+            err = ("other", f"{type(e).__name__}: {e}")
+    out, err = comm.bcast((out, err), root=0)
+    if err is not None:
+        if err[0] == "input":
+            raise InputError(*err[1])
+        from ..errors import SolveError
+
+        raise SolveError(f"planning the models on rank 0 failed: {err[1]}")
+    return out
 
 
 def cached_geometry_of(case, out: Path):
