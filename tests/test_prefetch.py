@@ -25,50 +25,57 @@ ROOT = Path(__file__).resolve().parents[1]
 TINY = ROOT / "tests" / "studies" / "tiny.toml"
 
 
-def test_the_pool_writes_the_models_one_process_writes(tmp_path, monkeypatch):
+@pytest.fixture(scope="module")
+def one_process(tmp_path_factory):
+    """The tiny screen computed the usual way, in one process (UPD_WORKERS=1, conftest)."""
     from conftest import run_upd
 
-    outs = {}
-    for n in ("2", "1"):
-        monkeypatch.setenv("UPD_WORKERS", n)
-        out = tmp_path / f"w{n}"
-        r = run_upd("screen", TINY, "--out", out, "--json")
-        assert r.code == 0, r
-        outs[n] = (out, r.json)
-    pool = outs["2"][1]["worker_pool"]
-    # meshes, rig, damper and the rigid damper of the screen's rig bound
-    assert pool["workers"] == 2 and pool["tasks"] == 4 and pool["failed"] == []
-    assert outs["1"][1]["worker_pool"]["workers"] == 0
+    out = tmp_path_factory.mktemp("one_process")
+    r = run_upd("screen", TINY, "--out", out, "--json")
+    assert r.code == 0, r
+    assert r.json["worker_pool"]["workers"] == 0
+    return out
+
+
+def assert_same_models(a: Path, b: Path) -> None:
+    """Both folders hold the same three reduced models, bit for bit, and the same screen."""
+    files = sorted(p.name for p in (a / "cache" / "fe").glob("*.h5"))
+    assert len(files) == 3  # rig, damper, rigid damper (the screen's rig bound)
+    assert files == sorted(p.name for p in (b / "cache" / "fe").glob("*.h5"))
+    for name in files:
+        with h5py.File(a / "cache" / "fe" / name) as x, h5py.File(b / "cache" / "fe" / name) as y:
+            for key in ("K", "M"):
+                assert np.array_equal(x[key][()], y[key][()]), (name, key)
 
     def rows(out):
         return [{k: v for k, v in r.items() if k != "seconds"} for r in json.loads(
             (out / "screen.json").read_text())]  # fmt: skip
 
-    assert rows(outs["2"][0]) == rows(outs["1"][0])
-    files = sorted(p.name for p in (outs["1"][0] / "cache" / "fe").glob("*.h5"))
-    assert len(files) == 3
-    assert files == sorted(p.name for p in (outs["2"][0] / "cache" / "fe").glob("*.h5"))
-    for name in files:
-        with (
-            h5py.File(outs["1"][0] / "cache" / "fe" / name) as a,
-            h5py.File(outs["2"][0] / "cache" / "fe" / name) as b,
-        ):
-            for key in ("K", "M"):
-                assert np.array_equal(a[key][()], b[key][()]), (name, key)
+    assert rows(a) == rows(b)
+
+
+@pytest.mark.xdist_group("prefetch")
+def test_the_pool_writes_the_models_one_process_writes(one_process, tmp_path, monkeypatch):
+    from conftest import run_upd
+
+    monkeypatch.setenv("UPD_WORKERS", "2")
+    r = run_upd("screen", TINY, "--out", tmp_path / "pool", "--json")
+    assert r.code == 0, r
+    pool = r.json["worker_pool"]
+    # meshes, rig, damper and the rigid damper of the screen's rig bound
+    assert pool["workers"] == 2 and pool["tasks"] == 4 and pool["failed"] == []
+    assert_same_models(one_process, tmp_path / "pool")
 
 
 @pytest.mark.mpi
-def test_ranks_write_the_models_one_process_writes(tmp_path):
+@pytest.mark.xdist_group("prefetch")
+def test_ranks_write_the_models_one_process_writes(one_process, tmp_path):
     """Under mpirun each rank reduces whole models alone: the same files, bit for bit."""
     import os
     import shutil
     import subprocess
     import sys
 
-    from conftest import run_upd
-
-    serial = tmp_path / "serial"
-    assert run_upd("screen", TINY, "--out", serial).code == 0
     par = tmp_path / "mpi"
     cmd = [shutil.which("mpirun"), "-n", "2", "--allow-run-as-root", "--oversubscribe",
            sys.executable, "-m", "workbench.cli.main", "screen", str(TINY), "--out", str(par),
@@ -77,15 +84,7 @@ def test_ranks_write_the_models_one_process_writes(tmp_path):
     assert p.returncode == 0, p.stderr[-3000:]
     pool = json.loads(p.stdout)["worker_pool"]
     assert pool["workers"] == 2 and pool["tasks"] == 4 and pool["failed"] == []
-    files = sorted(f.name for f in (serial / "cache" / "fe").glob("*.h5"))
-    assert len(files) == 3 and files == sorted(f.name for f in (par / "cache" / "fe").glob("*.h5"))
-    for name in files:
-        with (
-            h5py.File(serial / "cache" / "fe" / name) as a,
-            h5py.File(par / "cache" / "fe" / name) as b,
-        ):
-            for key in ("K", "M"):
-                assert np.array_equal(a[key][()], b[key][()]), (name, key)
+    assert_same_models(one_process, par)
 
 
 def test_a_bad_worker_count_is_refused_with_its_name(tmp_path, monkeypatch):
@@ -249,6 +248,7 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
+@pytest.mark.slow  # 20 s; the worker-death test below covers the pool's failure path
 def test_killed_main_process_takes_its_workers_and_keeps_finished_models(tmp_path, monkeypatch):
     """SIGKILL of ``upd screen`` once a worker has written a reduced model: no worker
     outlives it, and the rerun reuses the finished model instead of recomputing it."""
