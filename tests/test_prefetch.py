@@ -126,7 +126,7 @@ class FakePool:
         self.started: list[tuple] = []
 
     def submit(self, fn, *args):
-        f = FakeFuture(value=(1.0, {}))
+        f = FakeFuture(value=1.0)
         self.started.append((args[0], args[1].model_digest, f))
         return f
 
@@ -217,11 +217,11 @@ def test_an_error_while_planning_on_rank_0_is_raised_on_every_rank():
     otherwise wait in the next collective forever."""
     from workbench.studies.prefetch import _on_root
 
-    class Comm:  # what rank 1 sees: rank 0's broadcast
+    class Comm:  # what rank 1 sees: rank 0's broadcast of its failure
         rank = 1
 
         def bcast(self, obj, root=0):
-            return (None, ("input", ("cone-angle", 80.0, "0 < cone-angle < 45", "")))
+            return ("input", "cone-angle", 80.0, "0 < cone-angle < 45", "")
 
     with pytest.raises(InputError, match="cone-angle = 80.0"):
         _on_root(Comm(), lambda: None)

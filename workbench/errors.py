@@ -51,6 +51,32 @@ class SolveError(WorkbenchError, RuntimeError):
         super().__init__(message)
 
 
+def run_on_root(comm, fn, what: str):
+    """``fn()`` on rank 0 of ``comm``: its result there, None on the other ranks.
+
+    An error on rank 0 is raised on every rank (an InputError as itself, any
+    other as a SolveError naming ``what``): a rank that raised alone would
+    leave the others waiting in their next collective. Collective.
+    """
+    failure: tuple | None = None
+    out = None
+    if comm.rank == 0:
+        try:
+            out = fn()
+        except InputError as e:
+            failure = ("input", e.param, e.value, e.allowed, e.why)
+        except WorkbenchError as e:
+            failure = ("solve", str(e))
+        except Exception as e:  # noqa: BLE001 - re-raised below on every rank
+            failure = ("solve", f"{what} failed on rank 0: {type(e).__name__}: {e}")
+    failure = comm.bcast(failure, root=0)
+    if failure is not None:
+        if failure[0] == "input":
+            raise InputError(*failure[1:])
+        raise SolveError(failure[1])
+    return out
+
+
 def check_range(
     param: str,
     value: float,

@@ -128,6 +128,7 @@ class InterfaceSplit:
     Kib: object
     Mib: object
     sign_w: np.ndarray
+    m_node: object  # M_ii = m_node (x) I_3 (serial), else None: see node_mass
 
 
 def split_interface(body: ElasticBody, nodes: InterfaceNodes) -> InterfaceSplit:
@@ -150,6 +151,7 @@ def split_interface(body: ElasticBody, nodes: InterfaceNodes) -> InterfaceSplit:
     # weights for the sign of the modes: coordinates of the interior DOFs
     ld = interior - off
     xyz = body.owned_node_coords()[ld // 3]
+    M_ii = M.createSubMatrix(is_i, is_i)
     return InterfaceSplit(
         mine=mine,
         my_b=my_b,
@@ -158,10 +160,11 @@ def split_interface(body: ElasticBody, nodes: InterfaceNodes) -> InterfaceSplit:
         n_i=comm.allreduce(len(interior)),
         is_b=is_b,
         K_ii=K.createSubMatrix(is_i, is_i),
-        M_ii=M.createSubMatrix(is_i, is_i),
+        M_ii=M_ii,
         Kib=_local_csr(K.createSubMatrix(is_i, is_b), nb),
         Mib=_local_csr(M.createSubMatrix(is_i, is_b), nb),
         sign_w=sign_weight(xyz, ld % 3),
+        m_node=node_mass(M_ii, comm),
     )
 
 
@@ -193,7 +196,6 @@ def interior_factor(sp_: InterfaceSplit, n_modes: int, name: str, comm):
     F = ksp.getPC().getFactorMatrix()
     if n_modes == 0:
         return np.zeros((len(sp_.interior), 0)), np.zeros(0), F, ksp
-    m_node = node_mass(sp_.M_ii, comm)
     lam, Phi, _ = block_eigen(
         sp_.K_ii,
         sp_.M_ii,
@@ -201,7 +203,7 @@ def interior_factor(sp_: InterfaceSplit, n_modes: int, name: str, comm):
         n_modes,
         comm,
         what=f"{name} fixed-interface modes",
-        b_mult=lambda X: mass_mult(m_node, sp_.M_ii, X, sp_.n_i, comm),
+        b_mult=lambda X: mass_mult(sp_.m_node, sp_.M_ii, X, sp_.n_i, comm),
     )
     for k in range(Phi.shape[1]):
         if comm.allreduce(float(sp_.sign_w @ Phi[:, k])) < 0:
@@ -270,7 +272,7 @@ def craig_bampton(
         MibPsi = allsum(comm, Mib.T @ Psi)
         # Psi^T M_ii Psi is symmetric: each block of columns only needs its rows from the
         # block's first column down (half the products); the upper triangle is mirrored
-        m_node = node_mass(M_ii, comm)
+        m_node = sp_.m_node
         PMP = np.zeros((nb, nb))
         for c0 in range(0, nb, RHS_BLOCK):
             c1 = min(nb, c0 + RHS_BLOCK)

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, SolveError, WorkbenchError
+from ..errors import SolveError, run_on_root
 from ..io import code_version as _code_version
 from ..io import digest
 from ..log import mpi_size
@@ -123,22 +123,7 @@ def _build_mpi(comm: Any, lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry
     """
     import dolfinx  # noqa: F401 - collective PETSc initialisation, see above
 
-    failure: tuple | None = None
-    rec = None
-    if comm.rank == 0:
-        try:
-            rec = _build_or_reuse(lay, dig, out_dir)
-        except InputError as e:
-            failure = ("input", e.param, e.value, e.allowed, e.why)
-        except WorkbenchError as e:
-            failure = ("solve", str(e))
-        except Exception as e:  # noqa: BLE001 - re-raised below on every rank
-            failure = ("solve", f"geometry build failed on rank 0: {type(e).__name__}: {e}")
-    failure = comm.bcast(failure, root=0)
-    if failure is not None:
-        if failure[0] == "input":
-            raise InputError(*failure[1:])
-        raise SolveError(failure[1])
+    rec = run_on_root(comm, lambda: _build_or_reuse(lay, dig, out_dir), "geometry build")
     if comm.rank == 0:
         return rec  # type: ignore[return-value]
     return BuiltGeometry.load(out_dir / "geometry.h5")

@@ -161,8 +161,8 @@ def plan_tasks(
     return tasks
 
 
-def run_task(kind: str, case, out: str, force: bool, comm=None) -> tuple[float, dict]:
-    """Worker side: do one task (writes the cache); returns (seconds, geometry stats).
+def run_task(kind: str, case, out: str, force: bool, comm=None) -> float:
+    """Worker side: do one task (writes the cache); returns its seconds.
 
     ``comm``: the ranks doing it (``MPI.COMM_SELF`` for a rank alone under mpirun).
     """
@@ -183,7 +183,7 @@ def run_task(kind: str, case, out: str, force: bool, comm=None) -> tuple[float, 
             comm=comm,
             force=force,
         )
-    return time.perf_counter() - t0, dict(geom.stats)
+    return time.perf_counter() - t0
 
 
 def _stop(pool) -> None:
@@ -195,7 +195,7 @@ def _stop(pool) -> None:
             p.kill()
 
 
-def _in_worker(kind: str, case, out: str, force: bool) -> tuple[float, dict]:
+def _in_worker(kind: str, case, out: str, force: bool) -> float:
     """:func:`run_task` in a pool worker; its errors come back as RuntimeError.
 
     The pool pickles a task's exception to send it back, and our errors
@@ -359,7 +359,7 @@ class _Scheduler:
             if fut.done():
                 del self.running[fut]
                 try:
-                    secs, _ = fut.result()
+                    secs = fut.result()
                 except BrokenProcessPool as e:
                     self.running[fut] = t  # unfinished: listed by abandon()
                     self.abandon(str(e) or "the process pool broke")
@@ -372,7 +372,7 @@ class _Scheduler:
     def run_here(self, t: Task) -> None:
         """Run a task in the main process (while the workers start)."""
         try:
-            secs, _ = run_task(t.kind, t.case, str(self.out), self.force)
+            secs = run_task(t.kind, t.case, str(self.out), self.force)
         except Exception as e:  # noqa: BLE001 - the sequential path reports it again
             self.finish(t, None, e)
         else:
@@ -398,11 +398,18 @@ def _expand(case, out: Path, rigid_bound: bool, force: bool) -> list[Task]:
     return [] if geom is None else _reductions(case, geom, out, rigid_bound, force)
 
 
+def prefetch_models(cases, out, comm, *, rigid_bound: bool, force: bool = False) -> dict:
+    """:func:`prefetch_ranks` under MPI (``comm`` not None), else :func:`prefetch`."""
+    if comm is not None:
+        return prefetch_ranks(cases, out, comm, rigid_bound=rigid_bound, force=force)
+    return prefetch(cases, out, rigid_bound=rigid_bound, force=force)
+
+
 def prefetch_study(
     cases, need_models: list[str], out: Path, force: bool, timings: dict, comm
 ) -> set:
-    """:func:`prefetch` (:func:`prefetch_ranks` under MPI, ``comm`` not None) for the
-    models ``need_models`` (digests) of a study's ``cases``.
+    """:func:`prefetch_models` for the models ``need_models`` (digests) of a study's
+    ``cases``.
 
     Adds the pool's wall time to ``timings``; returns the models it recomputed
     under ``force`` (the main process must not recompute them again).
@@ -410,10 +417,7 @@ def prefetch_study(
     if not need_models:
         return set()
     firsts = [next(x for x in cases if x.model_digest == md) for md in need_models]
-    if comm is not None:
-        pool = prefetch_ranks(firsts, out, comm, rigid_bound=True, force=force)
-    else:
-        pool = prefetch(firsts, out, rigid_bound=True, force=force)
+    pool = prefetch_models(firsts, out, comm, rigid_bound=True, force=force)
     if not pool["workers"]:
         return set()
     timings["models (concurrent)"] = pool["seconds"]
@@ -450,7 +454,7 @@ def prefetch_ranks(cases, out, comm, *, rigid_bound: bool = False, force: bool =
     def run(ts):
         for t in ts:
             try:
-                secs, _ = run_task(t.kind, t.case, str(out), force, MPI.COMM_SELF)
+                secs = run_task(t.kind, t.case, str(out), force, MPI.COMM_SELF)
                 done.append((t.label, secs, ""))
             except Exception as e:  # noqa: BLE001 - the collective path reports it again
                 done.append((t.label, None, f"{type(e).__name__}: {e}"))
@@ -492,27 +496,10 @@ def prefetch_ranks(cases, out, comm, *, rigid_bound: bool = False, force: bool =
 
 def _on_root(comm, fn):
     """``fn()`` on rank 0, its result on every rank; an error there is raised on every rank
-    (a rank that raised alone would leave the others waiting in the next collective)."""
-    from ..errors import WorkbenchError
+    (:func:`workbench.errors.run_on_root`)."""
+    from ..errors import run_on_root
 
-    out, err = None, None
-    if comm.rank == 0:
-        try:
-            out = fn()
-        except InputError as e:
-            err = ("input", (e.param, e.value, e.allowed, e.why))
-        except WorkbenchError as e:
-            err = ("other", str(e))
-        except Exception as e:  # noqa: BLE001 - re-raised below on every rank
-            err = ("other", f"{type(e).__name__}: {e}")
-    out, err = comm.bcast((out, err), root=0)
-    if err is not None:
-        if err[0] == "input":
-            raise InputError(*err[1])
-        from ..errors import SolveError
-
-        raise SolveError(f"planning the models on rank 0 failed: {err[1]}")
-    return out
+    return comm.bcast(run_on_root(comm, fn, "planning the models"), root=0)
 
 
 def cached_geometry_of(case, out: Path):

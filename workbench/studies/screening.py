@@ -152,12 +152,9 @@ def run_screen(spec: StudySpec, out: str | Path, *, comm=None) -> dict[str, Any]
     rows: list[dict[str, Any]] = []
     timings: dict[str, float] = {}
     # meshes and reductions of every model at once: local workers, or one model per rank
-    from .prefetch import prefetch, prefetch_ranks
+    from .prefetch import prefetch_models
 
-    if comm is None:
-        pool = prefetch(list(models.values()), out, rigid_bound=True)
-    else:
-        pool = prefetch_ranks(list(models.values()), out, comm, rigid_bound=True)
+    pool = prefetch_models(list(models.values()), out, comm, rigid_bound=True)
     with progress_bar("screen: models", total=len(models), unit="model") as bar:
         for c in models.values():
             t0 = time.perf_counter()
