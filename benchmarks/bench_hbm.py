@@ -13,10 +13,10 @@ Cases (``--cases``, default all):
                mu N = 1, harmonics 0-7, 128 samples) at five levels, ours and
                pyHarm's pseudo-arc-length (benchmarks/pyharm_jenkins.py, run by
                the interpreter of --pyharm-python / $PYHARM_PYTHON, default
-               .venv-bench/bin/python; skipped with a note when absent): process
-               CPU of the solves (compilation excluded for both) and the peak
-               amplitude and frequency error of each against a converged reference
-               (ours with 1024 samples and a 1e-7 peak bracket)
+               .venv-bench/bin/python; skipped with a note when absent), each at
+               several settings: process CPU (compilation excluded for both)
+               against the worst peak error, the ratio at equal accuracy, and the
+               chart pyharm_compare.png (benchmarks/pyharm_compare.py)
 
 The rigs are :func:`workbench.hbm.examples.line_damper_rig` (springs and
 lumped masses, dense matrices, six rigid-body modes in K). Every curve
@@ -55,8 +55,10 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("UPD_NO_PROGRESS", "1")
 
+sys.path.insert(0, str(Path(__file__).parent))
+import pyharm_compare  # noqa: E402
+
 CASES = ("sdof", "sdof200", "two_dof", "pairs46", "pairs146", "pyharm")
-PYHARM_LEVELS = (0.6, 0.7, 0.8, 0.9, 1.0)  # pyHarm's continuation stops at once above mu N
 TARGETS_S = {"sdof": 1.0, "sdof200": 1.0, "pairs46": 10.0, "pairs146": 60.0}
 
 
@@ -91,105 +93,6 @@ def warm_up() -> None:
 
     ex = sdof_jenkins()
     frequency_response(ex.system, ex.f1, 1.0, (90, 110), ex.outputs, harmonics=(0, 1, 2, 3))
-
-
-def unit_jenkins():
-    """The dimensionless single-DOF Jenkins oscillator of the pyHarm comparison."""
-    from workbench.contact import ContactElements
-    from workbench.hbm import System
-
-    el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
-    return System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
-
-
-def run_pyharm(pyharm_python: str | None) -> dict:
-    """Ours and pyHarm on the unit Jenkins oscillator at PYHARM_LEVELS, side by side."""
-    import subprocess
-
-    import numpy as np
-
-    from workbench.hbm import SolverOptions, frequency_response
-
-    two_pi = 2 * np.pi
-    band = (0.5 / two_pi, 3.0 / two_pi)
-    s, f1, harm = unit_jenkins(), np.array([1.0 + 0j]), tuple(range(8))
-    ours, ref = [], []
-    for lv in PYHARM_LEVELS:
-        t0 = time.process_time()
-        b = frequency_response(s, f1, lv, band, [0], harmonics=harm, nt=128)
-        cpu = time.process_time() - t0
-        sm = b.summary()
-        ours.append(dict(level=lv, cpu_s=cpu, points=b.n_points,
-                         peak_amplitude=sm["peak_amplitude"],
-                         peak_omega=two_pi * sm["peak_frequency_hz"]))  # fmt: skip
-        r = frequency_response(
-            s, f1, lv, band, [0], harmonics=harm, nt=1024,
-            options=SolverOptions(stability=False, peak_ftol=1e-7, peak_iterations=60),
-        )  # fmt: skip
-        rs = r.summary()
-        ref.append((rs["peak_amplitude"], two_pi * rs["peak_frequency_hz"]))
-    row = dict(case="pyharm", levels=list(PYHARM_LEVELS), ours=ours, reference=ref)
-    py = (
-        pyharm_python
-        or os.environ.get("PYHARM_PYTHON")
-        or str(Path(__file__).resolve().parents[1] / ".venv-bench" / "bin" / "python")
-    )
-    if not Path(py).is_file():
-        row["pyharm"] = None
-        row["note"] = f"pyHarm not run: no interpreter at {py} (see benchmarks/pyharm_jenkins.py)"
-        return row
-    cmd = [
-        py,
-        str(Path(__file__).with_name("pyharm_jenkins.py")),
-        "--levels",
-        ",".join(f"{v:g}" for v in PYHARM_LEVELS),
-        "--nh",
-        "7",
-        "--nti",
-        "128",
-    ]
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as tmp:  # pyHarm writes a .pyHarm/ folder in its cwd
-        out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=3600, cwd=tmp)
-    if out.returncode != 0:
-        row["pyharm"] = None
-        row["note"] = f"pyHarm failed: {out.stderr.strip().splitlines()[-1:]}"
-        return row
-    row["pyharm"] = json.loads(out.stdout.strip().splitlines()[-1])
-    return row
-
-
-def print_pyharm(row: dict) -> None:
-    """The side-by-side table of the pyHarm comparison."""
-    ph = row.get("pyharm")
-    print("\nunit Jenkins oscillator, harmonics 0-7, 128 samples: process CPU of the solve "
-          "(compilation excluded), peak error against the converged reference")  # fmt: skip
-    hdr = "level  ours_cpu_s  pts  amp_err    w_err     | pyharm_cpu_s  pts  amp_err    w_err"
-    print(hdr)
-    tot_o = tot_p = 0.0
-    for k, o in enumerate(row["ours"]):
-        a_ref, w_ref = row["reference"][k]
-        line = (
-            f"{o['level']:5.2f}  {o['cpu_s']:10.3f}  {o['points']:3d}  "
-            f"{o['peak_amplitude'] / a_ref - 1:+.2e}  {o['peak_omega'] / w_ref - 1:+.2e}"
-        )
-        tot_o += o["cpu_s"]
-        if ph:
-            p = ph["levels"][k]
-            tot_p += p["cpu_s"]
-            line += (
-                f" | {p['cpu_s']:12.3f}  {p['points']:3d}  "
-                f"{p['peak_amplitude'] / a_ref - 1:+.2e}  {p['peak_omega'] / w_ref - 1:+.2e}"
-            )
-        print(line)  # fmt: skip
-    if ph:
-        print(f"total CPU: ours {tot_o:.3f} s, pyHarm {tot_p:.3f} s (ratio pyHarm/ours "
-              f"{tot_p / max(tot_o, 1e-9):.2f}); pyHarm compilation {ph['warm_up_cpu_s']:.1f} s "
-              "(numba/jax, cached on disk after the first run)")  # fmt: skip
-    else:
-        print(f"total CPU: ours {tot_o:.3f} s; {row['note']}")
 
 
 def run_case(name: str, profile: bool) -> dict:
@@ -265,7 +168,7 @@ def main(argv: list[str] | None = None) -> int:
     cmp_row = None
     if "pyharm" in names:
         names.remove("pyharm")
-        cmp_row = run_pyharm(args.pyharm_python)
+        cmp_row = pyharm_compare.run(args.pyharm_python)
     for name in names:
         r = run_case(name, args.profile)
         rows.append(r)
@@ -307,7 +210,8 @@ def main(argv: list[str] | None = None) -> int:
         for r in rows:
             print(f"\n--- {r['case']}: top functions by own time ---\n{r['profile']}")
     if cmp_row is not None:
-        print_pyharm(cmp_row)
+        pyharm_compare.report(cmp_row)
+        pyharm_compare.plot(cmp_row, args.out / "pyharm_compare.png")
     with open(args.out / "bench_hbm.json", "w") as fh:
         json.dump({"warm_up_s": warm, "cases": rows, "pyharm": cmp_row}, fh, indent=2)
     if not rows:

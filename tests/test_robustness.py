@@ -54,7 +54,7 @@ def test_methods_agree_on_the_friction_oscillator(jenkins_cells):
     assert len(ok) >= 4  # the branch has no turning point: every method should pass
     for c in ok:
         # 0.5 %: the top of a Jenkins peak is kinked and flat; where each method's points and
-        # its golden-section search land on it moves the largest amplitude by ~0.1 %
+        # its peak search land on it moves the largest amplitude by ~0.1 %
         assert abs(c["peak_amplitude"] - ref) / ref < 5e-3, c["method"]
         assert c["status"] == "ok"
         assert c["newton_its"] > 0 and c["n_points"] > 5 and c["wall_s"] > 0

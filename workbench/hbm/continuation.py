@@ -33,7 +33,7 @@ from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
 from .fourier import Fourier, default_nt
 from .options import SolverOptions
-from .peak import refine_peak as _refine_peak
+from .peak import insert_peaks, refine_peaks
 from .stability import UNKNOWN, Stability, hill_arpack, hill_dense
 from .stability import unknown as stability_unknown
 from .system import System
@@ -231,8 +231,7 @@ def frequency_response(
     try:
         if opts.refine_peak and len(rec.rows["freq_hz"]) >= 3:
             t0 = time.perf_counter()
-            _refine_peak(hb, corr, opts, rec, record, "out_amp")
-            _refine_peak(hb, corr, opts, rec, record, "out_h1")
+            insert_peaks(rec, record, refine_peaks(hb, corr, opts, rec))
             timings["peak"] = time.perf_counter() - t0
     except _Stop as stop:  # a lost contact found while refining: report, keep the branch
         message = message or str(stop)

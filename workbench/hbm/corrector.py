@@ -382,6 +382,7 @@ class Corrector:
         snes.setMaxNonlinearStepFailures(10**6)
         tol, max_it = self.opts.tol, self.opts.max_newton
         tol_stall, stall = self.opts.tol_stall, 4
+        stag = self.opts.stagnation
         reasons = PETSc.SNES.ConvergedReason
 
         def converged(snes, it, norms):
@@ -417,6 +418,10 @@ class Corrector:
                     corr.stats["n_stalled"] += 1
                     corr._own_ok = True
                     return reasons.CONVERGED_SNORM_RELATIVE
+                return reasons.DIVERGED_LOCAL_MIN
+            # far from a solution and not getting closer (the line search creeps along a
+            # kink the step straddles): give up now, a shorter step is cheaper
+            if stag and len(hist) > stag and hist[-1] > 0.5 * hist[-1 - stag]:
                 return reasons.DIVERGED_LOCAL_MIN
             if it >= max_it:
                 return reasons.DIVERGED_MAX_IT

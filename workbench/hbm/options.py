@@ -44,6 +44,13 @@ class SolverOptions:
         lo_open=True,
         hi=1e-2,
     )
+    stagnation: int = param(
+        8,
+        "give up a corrector solve whose residual has not halved in this many Newton "
+        "iterations (a step across a kink: the continuation halves it; 0: never)",
+        lo=0,
+        hi=1000,
+    )
     ksp_rtol: float = param(
         1e-10, "relative tolerance of GMRES (lagged)", lo=0.0, lo_open=True, hi=0.5
     )
@@ -86,11 +93,11 @@ class SolverOptions:
     max_points: int = param(3000, "points per curve before stopping", lo=2)
     refine_peak: bool = param(
         True,
-        "golden-section search of the max |y(t)| peak and of the harmonic-1 peak, each at its "
-        "own frequency",
+        "bracketed search (Brent) of the max |y(t)| peak and of the harmonic-1 peak, each at "
+        "its own frequency",
     )
     peak_iterations: int = param(
-        30, "largest number of golden-section iterations of each peak search", lo=1, hi=100
+        30, "largest number of trials of each peak's bracketed (Brent) search", lo=1, hi=100
     )
     peak_ftol: float = param(
         1e-4,
