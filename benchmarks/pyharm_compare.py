@@ -19,7 +19,9 @@ its one step knob; ours: the default and coarser or finer settings), which
 gives a curve of error against process CPU time for each. The ratio "at
 equal accuracy" of one of our runs is the CPU of pyHarm's cheapest run that
 is at least as accurate, divided by ours; when no pyHarm run of the sweep
-is, the ratio is given as a lower bound (">"). The discretisation error of
+is, the ratio is given as a lower bound (">"). Each curve under 3 s CPU is
+run three times in each tool and its least CPU kept (the machines we run on
+vary by +-30 % from one run to the next). The discretisation error of
 128 samples itself (against 1024) is printed as the scale below which a
 peak's accuracy no longer matters to a user.
 
@@ -50,6 +52,7 @@ OURS = {  # label: SolverOptions keywords
     "ds_max 0.05": dict(ds_max=0.05),
 }
 TWO_PI = 2 * np.pi
+REPEAT = 3  # runs of each curve under 3 s CPU, in both tools; the least CPU is kept
 
 
 def unit_jenkins():
@@ -61,7 +64,7 @@ def unit_jenkins():
     return System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
 
 
-def _ours(nt: int = NT, **kw) -> dict:
+def _ours(nt: int = NT, repeat: int = 1, **kw) -> dict:
     """Our five curves with options ``kw``: CPU, points, peak amplitude and frequency each."""
     from workbench.hbm import SolverOptions, frequency_response
 
@@ -69,11 +72,15 @@ def _ours(nt: int = NT, **kw) -> dict:
     band = (BAND_RAD_S[0] / TWO_PI, BAND_RAD_S[1] / TWO_PI)
     rows = []
     for lv in LEVELS:
-        t0 = time.process_time()
-        b = frequency_response(
-            s, f1, lv, band, [0], harmonics=HARMONICS, nt=nt, options=SolverOptions(**kw)
-        )
-        cpu = time.process_time() - t0
+        cpu = np.inf
+        for _ in range(repeat):  # the least CPU of repeats: the machine's noise is +-30 %
+            t0 = time.process_time()
+            b = frequency_response(
+                s, f1, lv, band, [0], harmonics=HARMONICS, nt=nt, options=SolverOptions(**kw)
+            )
+            cpu = min(cpu, time.process_time() - t0)
+            if cpu > 3.0:
+                break
         sm = b.summary()
         rows.append(dict(level=lv, cpu_s=cpu, points=b.n_points,
                          peak_amplitude=sm["peak_amplitude"],
@@ -85,7 +92,7 @@ def _pyharm(python: str) -> dict:
     cmd = [python, str(Path(__file__).with_name("pyharm_jenkins.py")),
            "--levels", ",".join(f"{v:g}" for v in LEVELS), "--nh", str(max(HARMONICS)),
            "--nti", str(NT), "--band", ",".join(f"{v:g}" for v in BAND_RAD_S),
-           "--ds-max", ",".join(f"{v:g}" for v in PYHARM_DS)]  # fmt: skip
+           "--ds-max", ",".join(f"{v:g}" for v in PYHARM_DS), "--repeat", str(REPEAT)]  # fmt: skip
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     with tempfile.TemporaryDirectory() as tmp:  # pyHarm writes a .pyHarm/ folder in its cwd
         out = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=3600, cwd=tmp)
@@ -132,7 +139,7 @@ def run(pyharm_python: str | None) -> dict:
     disc = errors(fine, ref)
     ours = []
     for label, kw in OURS.items():
-        r = _ours(**kw)
+        r = _ours(repeat=REPEAT, **kw)
         ours.append(dict(label=label, options=kw, **r, **errors(r, ref)))
     row = dict(case="pyharm", levels=list(LEVELS), nt=NT, reference=ref,
                discretisation_err=disc["amp_err"], ours=ours, pyharm=None)  # fmt: skip

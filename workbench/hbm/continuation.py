@@ -151,7 +151,7 @@ def frequency_response(
 
     def record(x: np.ndarray, w: float, its: int) -> None:
         t0 = time.perf_counter()
-        ev = hb.evaluate(x, w)
+        ev = corr.evaluated(x, w)
         pd = hb.point_data(ev, n_fine=opts.n_fine)
         timings["post"] += time.perf_counter() - t0
         if pd.lost_contact:

@@ -75,7 +75,11 @@ def refine_peaks(
             if not r.converged:  # once more with a fresh LU
                 corr.force_refresh = True
                 r = corr.solve_natural(guess(fq), TWO_PI * fq)
-            pd = hb.point_data(r.x, TWO_PI * fq, n_fine=opts.n_fine) if r.converged else None
+            pd = (
+                hb.point_data(corr.evaluated(r.x, TWO_PI * fq), n_fine=opts.n_fine)
+                if r.converged
+                else None
+            )
             cache[fq] = (pd, r.x, r.its)
         return cache[fq][0]
 
