@@ -15,7 +15,8 @@ steps past it and its largest amplitude inside the band is taken; the
 error over all five levels is reported too, with its own ratio.
 
 Each tool is run at several settings (pyHarm: its largest step ``ds_max``,
-its one step knob; ours: the default and coarser or finer settings), which
+its one step knob; ours: the default, which computes Hill's stability at
+every point where pyHarm computes none, and coarser or finer settings), which
 gives a curve of error against process CPU time for each. The ratio "at
 equal accuracy" of one of our runs is the CPU of pyHarm's cheapest run that
 is at least as accurate, divided by ours; when no pyHarm run of the sweep
@@ -49,6 +50,7 @@ OURS = {  # label: SolverOptions keywords
     "default": {},
     "peak bracket 1e-2": dict(peak_ftol=1e-2),
     "no peak refinement": dict(refine_peak=False),
+    "stability off": dict(stability=False),  # pyHarm computes no stability
     "ds_max 0.05": dict(ds_max=0.05),
 }
 TWO_PI = 2 * np.pi
