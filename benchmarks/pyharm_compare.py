@@ -230,8 +230,9 @@ def plot(row: dict, path: Path) -> None:
                         label="pyHarm pseudo-arc-length, by largest step")  # fmt: skip
             else:
                 ax.plot(x, y, mk, ms=8, color="C0", label="ours, by setting")
-            for r, xi, yi in zip(runs, x, y, strict=True):
-                ax.annotate(r["label"], (xi, yi), textcoords="offset points", xytext=(6, 4),
+            for j, (r, xi, yi) in enumerate(zip(runs, x, y, strict=True)):
+                dy = 4 if name == "pyHarm" or j % 2 == 0 else -10  # ours: labels alternate
+                ax.annotate(r["label"], (xi, yi), textcoords="offset points", xytext=(6, dy),
                             fontsize=7)  # fmt: skip
         ax.axhline(row["discretisation_err"], color="0.5", ls="--", lw=1,
                    label=f"error of {NT} samples itself (against 1024)")  # fmt: skip
