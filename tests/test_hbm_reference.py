@@ -258,11 +258,13 @@ def test_peaks_found_at_their_own_frequencies_within_0p1_percent():
 
 
 def test_stagnating_corrector_gives_up_early_without_changing_the_branch():
-    """A corrector solve that creeps along a kink (the residual not halving in
-    ``stagnation`` Newton iterations) is given up so the continuation halves the step: on
-    the unit Jenkins oscillator at the slip force the curve then costs at least 20 % fewer
-    residual evaluations than with the rule off (25 iterations per failing solve), both
-    peak amplitudes agree to 1e-5 and the peak frequency to the peak bracket (1e-4)."""
+    """A corrector solve that creeps along a kink is given up so the continuation halves the
+    step: the residual has not halved in ``stagnation`` Newton iterations, and each
+    iteration tries at most ``line_search_max_it`` step lengths. On the unit Jenkins
+    oscillator at the slip force the curve then costs at least 30 % fewer residual
+    evaluations than with both rules off (25 iterations of up to 40 trial steps per failing
+    solve), both peak amplitudes agree to 1e-5 and the peak frequency to the peak bracket
+    (1e-4)."""
     from workbench.contact import ContactElements
     from workbench.hbm import System
 
@@ -270,13 +272,12 @@ def test_stagnating_corrector_gives_up_early_without_changing_the_branch():
     s = System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
     f1, band = np.array([1.0 + 0j]), (0.5 / TWO_PI, 3.0 / TWO_PI)
     on, off = (
-        frequency_response(s, f1, 1.0, band, [0], harmonics=HARM8,
-                           options=SolverOptions(stagnation=n))
-        for n in (8, 0)
-    )  # fmt: skip
+        frequency_response(s, f1, 1.0, band, [0], harmonics=HARM8, options=o)
+        for o in (SolverOptions(), SolverOptions(stagnation=0, line_search_max_it=40))
+    )
     assert on.completed and off.completed
     assert off.stats["n_failed"] > 0  # the case has stagnating solves to give up
-    assert on.stats["n_residual"] < 0.8 * off.stats["n_residual"]
+    assert on.stats["n_residual"] < 0.7 * off.stats["n_residual"]
     a, c = on.summary(), off.summary()
     for key in ("peak_amplitude", "h1_amplitude"):
         assert a[key] == pytest.approx(c[key], rel=1e-5), key

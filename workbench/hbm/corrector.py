@@ -263,6 +263,8 @@ class Corrector:
         snes.setOptionsPrefix(prefix)
         po = PETSc.Options()
         po[f"{prefix}snes_linesearch_type"] = self.opts.line_search
+        if self.opts.line_search == "bt":
+            po[f"{prefix}snes_linesearch_max_it"] = self.opts.line_search_max_it
         fvec = PETSc.Vec().createSeq(n, comm=comm)
         corr = self
 
@@ -447,6 +449,8 @@ class Corrector:
         snes.setTolerances(max_it=max_it + 1)
         snes.setFromOptions()
         del po[f"{prefix}snes_linesearch_type"]
+        if self.opts.line_search == "bt":
+            del po[f"{prefix}snes_linesearch_max_it"]
         x = PETSc.Vec().createSeq(n, comm=comm)
         self._snes[kind] = (snes, x)
         return snes, x

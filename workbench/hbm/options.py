@@ -28,6 +28,13 @@ class SolverOptions:
         choices=("auto", "newton", "lagged", "chord"),
     )
     line_search: str = param("bt", "SNES line search type", choices=("basic", "bt", "l2", "cp"))
+    line_search_max_it: int = param(
+        2,
+        "trial step lengths of the bt line search per Newton iteration (PETSc's own default "
+        "is 40; more only creep along a kink, where a shorter continuation step is cheaper)",
+        lo=1,
+        hi=100,
+    )
     max_newton: int = param(25, "Newton iterations per point", lo=1, hi=1000)
     tol: float = param(
         1e-10,
