@@ -217,12 +217,13 @@ class Corrector:
         """The evaluation at unknowns x (m) and omega (rad/s): the last one if it is there.
 
         A converged solve ends with the residual evaluated at its solution, so the
-        point's outputs need no new AFT.
+        point's outputs need no new AFT. (A solve at fixed frequency works on
+        ``omega / w_ref``: its evaluation may sit an ulp or two off ``omega``.)
         """
         ev = self.ev
         if (
             ev is not None
-            and ev.omega == omega
+            and abs(ev.omega - omega) <= 4 * np.spacing(abs(omega))
             and ev.level == self.hb.level
             and np.array_equal(ev.x, x)
         ):

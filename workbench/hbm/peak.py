@@ -34,17 +34,19 @@ def refine_peaks(
 
     ``keys``: "out_amp" (the largest ``|y(t)|`` over the period) and/or
     "out_h1" (the harmonic-1 amplitude): each has its own peak frequency.
-    Where the branch is single-valued around the peaks (frequency increasing
-    from two points below the lowest peak point to two above the highest),
-    the solution is sampled at ``N_GRID`` frequencies spread over that span
-    (one grid for all keys: friction makes the top of the curve kinked, so
-    it may have several local maxima, a few per cent apart), then for each
-    key Brent's method (parabolic steps, golden section where they do not
-    shrink the bracket) refines from the best point known inside its two
-    neighbours until the bracket is about ``peak_ftol`` (relative) or
-    ``peak_iterations`` trials are spent: the result is never below the best
-    point known. Each trial is a corrector solve at fixed frequency from the
-    interpolated branch, shared by the keys.
+    Each key's span runs from two branch points below its largest one to
+    two above (overlapping spans are merged, so close peaks share one
+    grid). Where the branch is single-valued over the span (frequency
+    increasing), the solution is sampled at ``N_GRID`` frequencies spread
+    over it (friction makes the top of the curve kinked, so it may have
+    several local maxima, a few per cent apart), then Brent's method
+    (parabolic steps, golden section where they do not shrink the bracket)
+    refines from the best point known inside its two neighbours until the
+    bracket is about ``peak_ftol`` (relative) or about ``peak_iterations``
+    iterations are spent: the result is a trial that beats every branch
+    point, or nothing (branch points keep their recorded values, they are
+    not solved again). Each trial is a corrector solve at fixed frequency
+    from the interpolated branch, shared by the keys.
 
     Returns, per key, the best trial (frequency in Hz, x, Newton iterations,
     its position in frequency order) when it beats the computed points, else
@@ -55,62 +57,63 @@ def refine_peaks(
     vals = {k: np.array([a[0] for a in rec.rows[k]]) for k in keys}
     tops = {k: int(np.argmax(v)) for k, v in vals.items()}
     tops = {k: i for k, i in tops.items() if 0 < i < len(f) - 1}  # not at a band end
-    if not tops:
-        return [None] * len(keys)
-    lo, hi = max(min(tops.values()) - 2, 0), min(max(tops.values()) + 2, len(f) - 1)
-    if not np.all(np.diff(f[lo : hi + 1]) > 0):
-        return [None] * len(keys)
+    spans = {k: (max(i - 2, 0), min(i + 2, len(f) - 1)) for k, i in tops.items()}
+    if len(spans) == 2:  # overlapping spans share one grid; distant peaks get one each
+        (l1, h1), (l2, h2) = spans.values()
+        if max(l1, l2) <= min(h1, h2):
+            spans = dict.fromkeys(spans, (min(l1, l2), max(h1, h2)))
     xs = rec.rows["x"]
-
-    def guess(fq: float) -> np.ndarray:
-        j = int(np.clip(np.searchsorted(f[lo : hi + 1], fq) - 1 + lo, lo, hi - 1))
-        th = (fq - f[j]) / (f[j + 1] - f[j])
-        return xs[j] + th * (xs[j + 1] - xs[j])
-
     cache: dict[float, tuple[Any, np.ndarray, int]] = {}  # Hz -> (point data, x, its)
-
-    def solve(fq: float) -> Any:
-        if fq not in cache:
-            r = corr.solve_natural(guess(fq), TWO_PI * fq)
-            if not r.converged:  # once more with a fresh LU
-                corr.force_refresh = True
-                r = corr.solve_natural(guess(fq), TWO_PI * fq)
-            pd = (
-                hb.point_data(corr.evaluated(r.x, TWO_PI * fq), n_fine=opts.n_fine)
-                if r.converged
-                else None
-            )
-            cache[fq] = (pd, r.x, r.its)
-        return cache[fq][0]
-
-    grid = np.linspace(f[lo], f[hi], N_GRID + 2)[1:-1]
-    for q in grid:
-        solve(float(q))
-    out: list[tuple[float, np.ndarray, int, int] | None] = []
-    for key in keys:
-        if key not in tops:
-            out.append(None)
+    found: dict[str, tuple[float, np.ndarray, int, int] | None] = {}
+    for key, (lo, hi) in spans.items():
+        fb = f[lo : hi + 1]
+        if not np.all(np.diff(fb) > 0):  # a fold near the top: no single-valued bracket
+            found[key] = None
             continue
-        out.append(_search(key, solve, cache, f[lo : hi + 1], vals[key][lo : hi + 1], grid, opts))
-        if out[-1] is not None:
-            fq = out[-1][0]
-            out[-1] = (*out[-1][:3], int(np.searchsorted(f[lo : hi + 1], fq)) + lo)
-    return out
+        branch = dict(zip(fb.tolist(), vals[key][lo : hi + 1].tolist(), strict=True))
+
+        def guess(fq: float, lo=lo, hi=hi, fb=fb) -> np.ndarray:
+            j = int(np.clip(np.searchsorted(fb, fq) - 1 + lo, lo, hi - 1))
+            th = (fq - f[j]) / (f[j + 1] - f[j])
+            return xs[j] + th * (xs[j + 1] - xs[j])
+
+        def solve(fq: float, guess=guess) -> Any:
+            if fq not in cache:
+                r = corr.solve_natural(guess(fq), TWO_PI * fq)
+                if not r.converged:  # once more with a fresh LU
+                    corr.force_refresh = True
+                    r = corr.solve_natural(guess(fq), TWO_PI * fq)
+                pd = (
+                    hb.point_data(corr.evaluated(r.x, TWO_PI * fq), n_fine=opts.n_fine)
+                    if r.converged
+                    else None
+                )
+                cache[fq] = (pd, r.x, r.its)
+            return cache[fq][0]
+
+        grid = np.linspace(fb[0], fb[-1], N_GRID + 2)[1:-1]
+        hit = _search(key, solve, cache, branch, grid, opts)
+        found[key] = hit and (*hit, int(np.searchsorted(fb, hit[0])) + lo)
+    return [found.get(k) for k in keys]
 
 
-def _search(key: str, solve, cache: dict, fb: np.ndarray, vb: np.ndarray, grid, opts):
-    """Brent's method for one key from the best of the branch points ``fb`` and the grid."""
+def _search(key: str, solve, cache: dict, branch: dict, grid, opts):
+    """Brent's method for one key from the best of the branch points and the grid.
+
+    ``branch``: frequency -> recorded value of the branch points (never solved
+    again). Returns (frequency, x, its) of the best trial when it beats them.
+    """
 
     def value(fq: float) -> float:
-        pd = solve(float(fq))
+        fq = float(fq)
+        if fq in branch:
+            return branch[fq]
+        pd = solve(fq)
         return -np.inf if pd is None else float(getattr(pd, key)[0])
 
-    known = np.concatenate([fb, grid])
-    kval = np.concatenate([vb, [value(q) for q in grid]])
-    order = np.argsort(known)
-    known, kval = known[order], kval[order]
+    known = np.array(sorted({*branch, *map(float, grid)}))
+    kval = np.array([value(q) for q in known])
     k = int(np.argmax(kval))
-    a, b = known[max(k - 1, 0)], known[min(k + 1, known.size - 1)]
     fin = kval[np.isfinite(kval)]
     floor = float(fin.min() - np.ptp(fin))
 
@@ -118,15 +121,21 @@ def _search(key: str, solve, cache: dict, fb: np.ndarray, vb: np.ndarray, grid, 
         v = value(fq)
         return -(v if np.isfinite(v) else floor)
 
-    try:  # from the best known point, inside its neighbours (the top may have several maxima)
-        brent(cost, brack=(a, known[k], b), tol=0.5 * opts.peak_ftol, maxiter=opts.peak_iterations)
-    except ValueError:  # no bracket (a tie with a neighbour, or the best at an end)
-        fminbound(cost, a, b, xtol=opts.peak_ftol * 0.5 * (a + b), maxfun=opts.peak_iterations)
-    fq = max(cache, key=value)  # every trial so far, the other keys' searches included
-    if not np.isfinite(value(fq)) or value(fq) <= vb.max():
+    if 0 < k < known.size - 1 and kval[k] > max(kval[k - 1], kval[k + 1]):
+        # from the best known point, inside its neighbours (the top may have several maxima)
+        a, c = known[k - 1], known[k + 1]
+        brent(cost, brack=(a, known[k], c), tol=0.5 * opts.peak_ftol, maxiter=opts.peak_iterations)
+    else:  # no bracket (a tie with a neighbour, or the best at an end of the span)
+        a, c = known[max(k - 1, 0)], known[min(k + 1, known.size - 1)]
+        fminbound(cost, a, c, xtol=opts.peak_ftol * 0.5 * (a + c), maxfun=opts.peak_iterations)
+    trials = [q for q in cache if q not in branch]  # the other keys' trials count too
+    if not trials:
+        return None
+    fq = max(trials, key=value)
+    if not np.isfinite(value(fq)) or value(fq) <= max(branch.values()):
         return None
     _, x, its = cache[fq]
-    return fq, x, its, -1
+    return fq, x, its
 
 
 def insert_peaks(rec: Any, record, found: list) -> None:
