@@ -262,31 +262,26 @@ def test_stagnating_corrector_gives_up_early_without_changing_the_branch():
     step: the residual has not halved in ``stagnation`` Newton iterations, and each
     iteration tries at most ``line_search_max_it`` step lengths. On the unit Jenkins
     oscillator at the slip force the curve then costs at least 30 % fewer residual
-    evaluations than with both rules off (25 iterations of up to 40 trial steps per failing
-    solve), both peak amplitudes agree to 1e-5 and the peak frequency to the peak bracket
-    (1e-4)."""
+    evaluations than without the stagnation rule (25 iterations per failing solve) and 10 %
+    fewer than with PETSc's 40 trial steps, and the peak amplitudes agree to 1e-5 and the
+    peak frequency to the peak bracket (1e-4)."""
     from workbench.contact import ContactElements
     from workbench.hbm import System
 
     el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
     s = System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
     f1, band = np.array([1.0 + 0j]), (0.5 / TWO_PI, 3.0 / TWO_PI)
-    on, no_stag, no_ls, off = (
+    on, no_stag, no_ls = (
         frequency_response(s, f1, 1.0, band, [0], harmonics=HARM8, options=SolverOptions(**o))
-        for o in (
-            {},
-            dict(stagnation=0),
-            dict(line_search_max_it=40),
-            dict(stagnation=0, line_search_max_it=40),
-        )
+        for o in ({}, dict(stagnation=0), dict(line_search_max_it=40))
     )
-    assert on.completed and off.completed
-    assert off.stats["n_failed"] > 0  # the case has stagnating solves to give up
-    assert on.stats["n_residual"] < 0.7 * off.stats["n_residual"]
-    # each rule does its part (about 665 against 1020 without the first, 806 without the
-    # second, 1186 without both)
-    assert on.stats["n_residual"] < 0.9 * no_stag.stats["n_residual"]
+    assert on.completed and no_stag.completed and no_ls.completed
+    assert no_stag.stats["n_failed"] > 0  # the case has stagnating solves to give up
+    # each rule does its part (665 residuals against 1020 without the first, 806 without
+    # the second; 1186 without both)
+    assert on.stats["n_residual"] < 0.7 * no_stag.stats["n_residual"]
     assert on.stats["n_residual"] < 0.9 * no_ls.stats["n_residual"]
+    off = no_stag
     a, c = on.summary(), off.summary()
     for key in ("peak_amplitude", "h1_amplitude"):
         assert a[key] == pytest.approx(c[key], rel=1e-5), key
