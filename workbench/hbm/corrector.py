@@ -199,18 +199,24 @@ class Corrector:
         self.ev: Evaluation | None = None
 
     # -- scaled problem --------------------------------------------------------
-    def evaluation(self, xs: np.ndarray, ws: float) -> Evaluation:
-        """The evaluation at scaled (xs, ws): the last one if it is there, else a new one."""
-        x, w = np.asarray(xs, dtype=float) * self.u_ref, float(ws) * self.w_ref
+    def _last(self, x: np.ndarray, omega: float, ulps: int = 0) -> Evaluation | None:
+        """The last evaluation if it is at (x, omega) (omega within ``ulps`` ulp), else None."""
         ev = self.ev
-        if not (
+        if (
             ev is not None
-            and ev.omega == w
+            and abs(ev.omega - omega) <= ulps * np.spacing(abs(omega))
             and ev.level == self.hb.level
             and np.array_equal(ev.x, x)
         ):
-            ev = self.hb.evaluate(x, w)
-            self.ev = ev
+            return ev
+        return None
+
+    def evaluation(self, xs: np.ndarray, ws: float) -> Evaluation:
+        """The evaluation at scaled (xs, ws): the last one if it is there, else a new one."""
+        x, w = np.asarray(xs, dtype=float) * self.u_ref, float(ws) * self.w_ref
+        ev = self._last(x, w)
+        if ev is None:
+            ev = self.ev = self.hb.evaluate(x, w)
         return ev
 
     def evaluated(self, x: np.ndarray, omega: float) -> Evaluation:
@@ -220,15 +226,8 @@ class Corrector:
         point's outputs need no new AFT. (A solve at fixed frequency works on
         ``omega / w_ref``: its evaluation may sit an ulp or two off ``omega``.)
         """
-        ev = self.ev
-        if (
-            ev is not None
-            and abs(ev.omega - omega) <= 4 * np.spacing(abs(omega))
-            and ev.level == self.hb.level
-            and np.array_equal(ev.x, x)
-        ):
-            return ev
-        return self.hb.evaluate(x, omega)
+        ev = self._last(x, omega, ulps=4)
+        return ev if ev is not None else self.hb.evaluate(x, omega)
 
     def _res(self, xs: np.ndarray, ws: float) -> np.ndarray:
         return self.evaluation(xs, ws).r / self.u_ref
