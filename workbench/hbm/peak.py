@@ -128,7 +128,10 @@ def _search(key: str, solve, cache: dict, branch: dict, grid, opts):
     else:  # no bracket (a tie with a neighbour, or the best at an end of the span)
         a, c = known[max(k - 1, 0)], known[min(k + 1, known.size - 1)]
         fminbound(cost, a, c, xtol=opts.peak_ftol * 0.5 * (a + c), maxfun=opts.peak_iterations)
-    trials = [q for q in cache if q not in branch]  # the other keys' trials count too
+    # the other key's trials count too, where they lie inside this span (the position
+    # returned for insertion is within it)
+    lo, hi = min(branch), max(branch)
+    trials = [q for q in cache if lo < q < hi and q not in branch]
     if not trials:
         return None
     fq = max(trials, key=value)
