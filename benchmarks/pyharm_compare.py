@@ -42,8 +42,12 @@ from pathlib import Path
 
 import numpy as np
 
-LEVELS = (0.6, 0.7, 0.8, 0.9, 1.0)  # pyHarm's continuation stops at once above mu N
-BAND_RAD_S = (0.5, 3.0)
+from workbench.hbm.examples import unit_jenkins
+
+TWO_PI = 2 * np.pi
+EXAMPLE = unit_jenkins()
+LEVELS = EXAMPLE.levels  # pyHarm's continuation stops at once above mu N
+BAND_RAD_S = tuple(round(TWO_PI * f, 12) for f in EXAMPLE.band_hz)  # (0.5, 3.0)
 HARMONICS = tuple(range(8))
 NT = 128
 PYHARM_DS = (0.1, 0.03, 0.01, 0.003, 0.001)  # pyHarm's default ds_max is 0.1
@@ -54,25 +58,14 @@ OURS = {  # label: SolverOptions keywords
     "stability off": dict(stability=False),  # pyHarm computes no stability
     "ds_max 0.05": dict(ds_max=0.05),
 }
-TWO_PI = 2 * np.pi
 REPEAT = 3  # runs of every curve in both tools; the least CPU is kept
-
-
-def unit_jenkins():
-    """The dimensionless single-DOF Jenkins oscillator of the comparison."""
-    from workbench.contact import ContactElements
-    from workbench.hbm import System
-
-    el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
-    return System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
 
 
 def _ours(nt: int = NT, repeat: int = 1, **kw) -> dict:
     """Our five curves with options ``kw``: CPU, points, peak amplitude and frequency each."""
     from workbench.hbm import SolverOptions, frequency_response
 
-    s, f1 = unit_jenkins(), np.array([1.0 + 0j])
-    band = (BAND_RAD_S[0] / TWO_PI, BAND_RAD_S[1] / TWO_PI)
+    s, f1, band = EXAMPLE.system, EXAMPLE.f1, EXAMPLE.band_hz
     rows = []
     for lv in LEVELS:
         cpu = np.inf

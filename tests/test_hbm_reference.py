@@ -14,7 +14,7 @@ from workbench.hbm import (
     time_response,
 )
 from workbench.hbm.corrector import Corrector
-from workbench.hbm.examples import sdof_jenkins, two_dof_contact
+from workbench.hbm.examples import sdof_jenkins, two_dof_contact, unit_jenkins
 
 TWO_PI = 2 * np.pi
 
@@ -191,11 +191,7 @@ def test_accuracy_indicator_fails_when_the_sampling_is_coarse():
     """The energy balance closes at any converged point (it cannot fail), while the
     loop-energy vs harmonic-work mismatch falls as O(1/nt^2) with the samples per period:
     from several per cent at nt = 8 to ~1e-4 at nt = 256; a branch at nt = 8 says so."""
-    from workbench.contact import ContactElements
-    from workbench.hbm import System
-
-    el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
-    s = System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
+    s = unit_jenkins().system
     w = 1.8
     acc, resid = {}, {}
     for nt in (8, 64, 256):
@@ -226,11 +222,7 @@ def test_peaks_found_at_their_own_frequencies_within_0p1_percent():
     two maxima 2 % apart, 0.14 % apart in height: a search that settles on the lower one
     fails here), and no reference point is higher than the reported peak. The refined
     points are inserted in frequency order."""
-    from workbench.contact import ContactElements
-    from workbench.hbm import System
-
-    el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
-    s = System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
+    s = unit_jenkins().system
     f1 = np.array([1.0 + 0j])
     b = frequency_response(s, f1, 1.0, (0.5 / TWO_PI, 3.0 / TWO_PI), [0], harmonics=HARM8)
     sm = b.summary()
@@ -265,11 +257,7 @@ def test_stagnating_corrector_gives_up_early_without_changing_the_branch():
     evaluations than without the stagnation rule (25 iterations per failing solve) and 10 %
     fewer than with PETSc's 40 trial steps, and the peak amplitudes agree to 1e-5 and the
     peak frequency to the peak bracket (1e-4)."""
-    from workbench.contact import ContactElements
-    from workbench.hbm import System
-
-    el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
-    s = System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
+    s = unit_jenkins().system
     f1, band = np.array([1.0 + 0j]), (0.5 / TWO_PI, 3.0 / TWO_PI)
     on, no_stag, no_ls = (
         frequency_response(s, f1, 1.0, band, [0], harmonics=HARM8, options=SolverOptions(**o))

@@ -15,7 +15,7 @@ from workbench.hbm import (
     time_response,
 )
 from workbench.hbm.corrector import Corrector, Factorization
-from workbench.hbm.examples import sdof_jenkins, sdof_unilateral, two_dof_contact
+from workbench.hbm.examples import sdof_jenkins, sdof_unilateral, two_dof_contact, unit_jenkins
 from workbench.hbm.stability import STABLE, UNSTABLE, hill_arpack, hill_dense, hill_eig
 
 TWO_PI = 2 * np.pi
@@ -183,15 +183,9 @@ def test_lost_contact_stops_the_branch_and_keeps_it():
     assert b.out_amp[-1, 0] > 0.5 * 1.0 / k
 
 
-def jenkins_unit() -> System:
-    """m = 1 kg, k = 1 N/m, c = 0.02 N s/m, Jenkins kt = 20 N/m, mu N = 1 N (dimensionless)."""
-    el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
-    return System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el)
-
-
 @pytest.fixture(scope="module")
 def jenkins_branch():
-    s = jenkins_unit()
+    s = unit_jenkins().system
     band = (0.5 / TWO_PI, 3.0 / TWO_PI)
     return s, frequency_response(s, np.array([1.0 + 0j]), 1.0, band, [0], harmonics=HARM)
 
@@ -248,7 +242,7 @@ def test_two_dof_separating_point_stays_unstable():
 
 def test_stability_off_is_unknown_not_stable():
     """Without Hill's method the verdict is unknown (-1), never stable, in data and CSV."""
-    s = jenkins_unit()
+    s = unit_jenkins().system
     b = frequency_response(
         s,
         np.array([1.0 + 0j]),

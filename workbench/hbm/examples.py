@@ -2,6 +2,8 @@
 
 * :func:`sdof_jenkins`: one mass on a spring with a Jenkins element to the
   ground (the classic friction oscillator);
+* :func:`unit_jenkins`: the same oscillator without units (m = k = 1, the
+  peer-code comparison's case);
 * :func:`sdof_unilateral`: one mass on a spring pressed on a preloaded
   unilateral spring (it separates when the motion exceeds ``n0 / kn``);
 * :func:`two_dof_contact`: a point mass moving in a plane (x tangential, z
@@ -67,6 +69,26 @@ def sdof_jenkins(
         (0.8 * f_free_hz, 1.2 * fs),
         (0.2, 0.5, 1.0, 2.0),
         dict(k=k, kt=kt_ratio * k),
+    )
+
+
+def unit_jenkins() -> ExampleModel:
+    """The friction oscillator without units: m = 1, k = 1, c = 0.02, kt = 20, mu N = 1.
+
+    Stuck, its natural frequency is sqrt(21) = 4.58 rad/s; the band is
+    0.5..3 rad/s (given in "Hz": divided by 2 pi), the levels the peer-code
+    comparison's (its continuation stops at once above mu N).
+    """
+    el = ContactElements.from_dofs(1, [[0]], mu=1.0, kt=20.0, n0=1.0)
+    sysm = System(M=[[1.0]], K=[[1.0]], C=[[0.02]], contacts=el, dof_names=("x",))
+    return ExampleModel(
+        sysm,
+        np.array([1.0 + 0j]),
+        np.array([0]),
+        ("x",),
+        (0.5 / (2 * np.pi), 3.0 / (2 * np.pi)),
+        (0.6, 0.7, 0.8, 0.9, 1.0),
+        dict(k=1.0, kt=20.0),
     )
 
 
