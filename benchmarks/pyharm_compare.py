@@ -239,8 +239,10 @@ def plot(row: dict, path: Path) -> None:
         ax.grid(True, which="both", alpha=0.3)
     axes[0].set_ylabel("worst relative error of the peak amplitude")
     axes[0].legend(fontsize=8, loc="upper right")
+    missing = "" if row["pyharm"] else f"\n{row.get('note', 'pyHarm not run')}: ours only"
     fig.suptitle(f"Unit Jenkins oscillator, harmonics 0-{max(HARMONICS)}, {NT} samples: error "
-                 "against the same discretisation solved to convergence", fontsize=11)  # fmt: skip
+                 f"against the same discretisation solved to convergence{missing}",
+                 fontsize=11)  # fmt: skip
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
