@@ -183,6 +183,36 @@ def test_lost_contact_stops_the_branch_and_keeps_it():
     assert b.out_amp[-1, 0] > 0.5 * 1.0 / k
 
 
+def test_a_peak_trial_without_contact_is_never_the_peak(monkeypatch):
+    """The peak search solves trials between branch points; one that lands on a state
+    without contact (singular, where the continuation itself would stop) is a failed
+    trial: never inserted as the peak, and the completed branch is not failed for it.
+    Every state above the top branch point is flagged here as without contact, so every
+    trial that would beat the branch points is refused and the peak is the top point."""
+    import dataclasses
+
+    ex = unit_jenkins()
+    band = (0.5 / TWO_PI, 3.0 / TWO_PI)
+    args = (ex.system, np.array([1.0 + 0j]), 1.0, band, [0])
+    plain = frequency_response(*args, harmonics=HARM, options=SolverOptions(refine_peak=False))
+    top = float(plain.out_amp[:, 0].max())
+    refined = frequency_response(*args, harmonics=HARM)
+    assert refined.out_amp[:, 0].max() > top * (1 + 1e-6)  # the search does beat the points
+    real = HarmonicBalance.point_data
+
+    def point_data(self, ev, **kw):
+        pd = real(self, ev, **kw)
+        return dataclasses.replace(pd, lost_contact=bool(pd.out_amp[0] > top * (1 + 1e-12)))
+
+    monkeypatch.setattr(HarmonicBalance, "point_data", point_data)
+    b = frequency_response(*args, harmonics=HARM)
+    assert b.completed and not b.failed, b.message
+    # at most the harmonic-1 peak was inserted (its trial stays below the top |y|)
+    assert b.n_points <= plain.n_points + 1
+    assert b.out_amp[:, 0].max() == top
+    assert "without contact at" in b.message and "not used" in b.message
+
+
 @pytest.fixture(scope="module")
 def jenkins_branch():
     s = unit_jenkins().system

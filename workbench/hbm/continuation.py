@@ -239,6 +239,15 @@ def frequency_response(
     finally:
         bar_ctx.__exit__(None, None, None)
         corr.destroy()
+    lost = corr.stats.get("peak_trials_lost_contact") or []
+    if lost:  # trials between branch points that found the damper without contact: not used
+        note = (
+            f"the peak search found the damper without contact at {len(lost)} trial "
+            f"frequenc{'y' if len(lost) == 1 else 'ies'} ({', '.join(f'{q:.6g}' for q in lost)} "
+            "Hz), not used: the top of the curve may lie where no contact holds it"
+        )
+        log.warning("%s%s", f"{label}: " if label else "", note)
+        message = f"{message or ('reached the band end' if completed else '')}; {note}"
 
     arrays = rec.arrays(O.shape[0], fourier.nh, system.n_el, hb.N)
     timings["total"] = time.perf_counter() - t_start

@@ -48,6 +48,11 @@ def refine_peaks(
     not solved again). Each trial is a corrector solve at fixed frequency
     from the interpolated branch, shared by the keys.
 
+    A trial that does not converge, or converges onto a state where the
+    damper has lost contact (singular: the continuation stops at such a
+    point), counts as failed and is never chosen; the frequencies of the
+    latter are listed in ``corr.stats["peak_trials_lost_contact"]``.
+
     Returns, per key, the best trial (frequency in Hz, x, Newton iterations,
     its position in frequency order) when it beats the computed points, else
     None; :func:`insert_peaks` records them. ``rec``: the branch's recorder
@@ -63,6 +68,7 @@ def refine_peaks(
         if max(l1, l2) <= min(h1, h2):
             spans = dict.fromkeys(spans, (min(l1, l2), max(h1, h2)))
     xs = rec.rows["x"]
+    lost = corr.stats.setdefault("peak_trials_lost_contact", [])  # Hz, for the branch message
     cache: dict[float, tuple[Any, np.ndarray, int]] = {}  # Hz -> (point data, x, its)
     found: dict[str, tuple[float, np.ndarray, int, int] | None] = {}
     for key, (lo, hi) in spans.items():
@@ -88,6 +94,9 @@ def refine_peaks(
                     if r.converged
                     else None
                 )
+                if pd is not None and pd.lost_contact:  # a singular state: never a peak
+                    lost.append(fq)
+                    pd = None
                 cache[fq] = (pd, r.x, r.its)
             return cache[fq][0]
 
