@@ -334,6 +334,11 @@ def _ramp_level(hb: HarmonicBalance, corr: Corrector, w: float, level: float):
     return res
 
 
+def _why(reason: str) -> str:
+    """The last corrector failure in words: a PETSc reason is quoted as SNES's."""
+    return f"SNES: {reason}" if reason.split(" ")[0].isupper() else reason
+
+
 def _stability(
     hb: HarmonicBalance,
     corr: Corrector,
@@ -454,6 +459,7 @@ def _arclength(
             res = corr.solve_arclength(yp[:nx] * u_ref, yp[nx] * w_ref, sph)
             if res.converged and norm(y_of(res.x, res.omega) - prev, a) < 0.5 * ds:
                 res.converged = False  # the sphere's other cut: back where we came from
+                res.reason = "converged back onto the previous point (rejected)"
             if not res.converged:
                 # a fold exactly at a kink can turn the branch back almost on itself: try
                 # the plane ahead along the secant with its frequency part reversed, and keep
@@ -470,13 +476,14 @@ def _arclength(
                     off = norm(d - along * t, a)
                     if along >= 0 or off < 0.05 * norm(d, a):
                         res.converged = False
+                        res.reason = "converged back onto the incoming branch (rejected)"
         if not res.converged:
             ds *= 0.5
             corr.force_refresh = True
             if ds < opts.ds_min:
                 raise _Stop(
                     f"the corrector failed at f = {w / TWO_PI:.6g} Hz after "
-                    f"{state['n']} points (SNES: {res.reason}) even with the smallest "
+                    f"{state['n']} points ({_why(res.reason)}) even with the smallest "
                     f"step ds_min = {opts.ds_min:g}; the branch so far is kept",
                     failed=True,
                 )
