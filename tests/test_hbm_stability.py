@@ -270,6 +270,45 @@ def test_two_dof_separating_point_stays_unstable():
     assert st.max_real > 0.01 * w
 
 
+def test_a_contested_selection_is_unknown_and_the_orbit_is_indeed_left():
+    """The two-DOF example with 0.5 % damping at 3 N, 94.29 Hz (separating): the four most
+    centred eigenvectors give a stable set, but an exponent of real part +18 1/s ranks
+    just behind them (RMS index 0.3 % larger). The verdict rests on that ranking, so it
+    is unknown, not stable; and indeed a time integration started on the orbit leaves
+    it: its largest distance from the orbit over periods 16-20 is about 4 times that over
+    periods 6-10 (measured), where the kept exponents (real parts -24 1/s and below)
+    would have it shrink by exp(-24 * 10 / 94) = 0.08."""
+    from workbench.errors import SolveError
+    from workbench.hbm.stability import UNKNOWN
+
+    ex = two_dof_contact(zeta=0.005)
+    fq = 94.2859
+    w = TWO_PI * fq
+    f = Fourier(tuple(range(6)), 128)
+    b = frequency_response(ex.system, ex.f1, 3.0, (ex.band_hz[0], fq), ex.outputs,
+                           harmonics=f.harmonics, nt=f.nt)  # fmt: skip
+    assert b.completed and b.freq_hz[-1] == pytest.approx(fq, rel=1e-12)
+    assert b.stability[-1] == UNKNOWN
+    hb = HarmonicBalance(ex.system, ex.f1, f, ex.outputs, 3.0)
+    ev = hb.evaluate(b.x[-1], w)
+    assert ev.aft.status.max() == 2  # the contact opens during the period
+    st = hill_dense(*hb.hill_dense(ev), w, f.harmonics)
+    assert st.verdict == UNKNOWN and not st.count_ok
+    assert st.max_real < 0 and "hinges on the selection" in st.note
+    q0, v0 = f.state_at(hb.response(b.x[-1], w), w)
+    q, v, dist = q0, v0, []
+    for _ in range(20):
+        try:
+            tr = time_response(ex.system, ex.f1, 3.0, fq, ex.outputs, harmonics=f.harmonics,
+                               max_periods=1, q0=q, v0=v)  # fmt: skip
+        except SolveError as e:  # one period is never "periodic": keep it
+            tr = e.partial
+        q, v = tr.q_end, tr.v_end
+        dist.append(np.linalg.norm(q - q0) / np.linalg.norm(q0))
+    # (the distance oscillates from period to period: compare maxima over five periods)
+    assert max(dist[15:]) > 2 * max(dist[5:10]), dist
+
+
 def test_stability_off_is_unknown_not_stable():
     """Without Hill's method the verdict is unknown (-1), never stable, in data and CSV."""
     s = unit_jenkins().system

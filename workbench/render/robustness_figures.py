@@ -152,16 +152,16 @@ def plot_hbm_vs_time(checks: Sequence[dict[str, Any]], path: str | Path) -> Path
     for ax, ch in zip(axes[0], checks, strict=True):
         f = np.asarray(ch["freq_hz"])
         a = 1e3 * np.asarray(ch["amp"])  # m -> mm
-        st = np.asarray(ch["stable"], bool)
-        ax.plot(f, np.where(st, a, np.nan), color="#1f6fb4", lw=1.4, label="HBM (stable)")
-        ax.plot(
-            f,
-            np.where(~st, a, np.nan),
-            color="#1f6fb4",
-            lw=1.2,
-            ls="--",
-            label="HBM (Hill-unstable)",
-        )
+        # Hill's verdicts, three-valued (a check cached with two reads as stable/unstable)
+        v = np.asarray(ch.get("stability", np.where(ch["stable"], 1, 0)), int)
+        for code, style, lab in (
+            (1, dict(color="#1f6fb4", lw=1.4), "HBM (stable)"),
+            (0, dict(color="#1f6fb4", lw=1.2, ls="--"), "HBM (Hill-unstable)"),
+            (-1, dict(color="0.55", lw=1.8, ls=":"), "HBM (stability unknown)"),
+        ):
+            # each piece runs to the next point, so that isolated points still show
+            m = (v == code) | np.r_[False, v[:-1] == code]
+            ax.plot(f, np.where(m, a, np.nan), label=lab, **style)
         for r in ch["points"]:
             filled = r["ti_converged"]
             ax.plot(

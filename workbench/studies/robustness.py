@@ -213,6 +213,11 @@ _CELL_COLS = (
 )
 
 
+def _verdict(row: dict) -> str:
+    """A time-check row's Hill verdict (rows cached before verdicts were three-valued: two)."""
+    return row.get("hill_verdict") or ("stable" if row["hill_stable"] else "unstable")
+
+
 def _write_csv(path: Path, rows: list[dict[str, Any]], cols: tuple[str, ...]) -> Path:
     return write_rows_csv(path, rows, cols, digits=6)
 
@@ -320,6 +325,7 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
                 "why",
                 "freq_hz",
                 "hill_stable",
+                "hill_verdict",
                 "hbm_amplitude",
                 "ti_amplitude",
                 "diff_pct",
@@ -411,7 +417,19 @@ def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str
             f"starting HBM orbit, {max(abs(r['diff_nearest_pct']) for r in rows):.3g} % to the "
             "nearest HBM solution at the same frequency."
         )
-    bad = [r for ch in checks for r in ch["points"] if not r["hill_stable"]]
+    bad = [r for ch in checks for r in ch["points"] if _verdict(r) == "unstable"]
+    unk = [r for ch in checks for r in ch["points"] if _verdict(r) == "unknown"]
+    if unk:
+        head.append(
+            f"At {len(unk)} suspect point(s) Hill's verdict is unknown (its selections "
+            "disagree); the time integration there: "
+            + "; ".join(
+                f"{r['model']} at {r['freq_hz']:.4g} Hz: "
+                f"{r['diff_pct']:+.3g} %" + ("" if r["ti_converged"] else " (not periodic)")
+                for r in unk
+            )
+            + "."
+        )
     if bad:
         head.append(
             f"At {len(bad)} Hill-unstable point(s) the time integration left the HBM "

@@ -80,22 +80,23 @@ TIME_MODELS: dict[str, TimeModel] = {
 }
 
 
-def suspect_points(freq_hz, amp, stable, status, max_points: int = 4) -> list[tuple[int, str]]:
+def suspect_points(freq_hz, amp, stability, status, max_points: int = 4) -> list[tuple[int, str]]:
     """Indices of points where the HBM is suspect, with why: peak, turning points, unstable,
-    separation (at most ``max_points``, distinct)."""
+    separation (at most ``max_points``, distinct). ``stability``: Hill's verdicts (1 stable,
+    0 unstable, -1 unknown; a bool array reads as stable / unstable)."""
     f = np.asarray(freq_hz)
     a = np.asarray(amp)
-    st = np.asarray(stable, dtype=bool)
+    v = np.asarray(stability).astype(int)
     out: list[tuple[int, str]] = [(int(np.argmax(a)), "peak")]
     for j in turning_points(f)[:2]:
         out.append((int(j), "turning point"))
-    bad = np.flatnonzero(~st)
+    bad = np.flatnonzero(v == 0)
     if bad.size:
         out.append((int(bad[np.argmax(a[bad])]), "Hill-unstable"))
     stat = np.asarray(status)
     if stat.size:
         sep = np.flatnonzero(stat.max(axis=1) >= 2 if stat.ndim == 2 else stat >= 2)
-        sep = sep[st[sep]] if sep.size else sep
+        sep = sep[v[sep] == 1] if sep.size else sep
         if sep.size:
             out.append((int(sep[np.argmax(a[sep])]), "separation"))
     seen: dict[int, str] = {}
@@ -136,7 +137,7 @@ def time_check(name: str, tm: TimeModel) -> dict[str, Any]:
         opts.dc_anchor,
     )
     rows = []
-    for i, why in suspect_points(b.freq_hz, b.out_amp[:, 0], b.stable, b.status):
+    for i, why in suspect_points(b.freq_hz, b.out_amp[:, 0], b.stability, b.status):
         w = 2 * np.pi * b.freq_hz[i]
         q0, v0 = hb.fourier.state_at(hb.response(b.x[i], w), w)
         ts = time.perf_counter()
@@ -164,6 +165,7 @@ def time_check(name: str, tm: TimeModel) -> dict[str, Any]:
                 "why": why,
                 "freq_hz": float(b.freq_hz[i]),
                 "hill_stable": bool(b.stable[i]),
+                "hill_verdict": b.stability_name(i),
                 "hbm_amplitude": a_hbm,
                 "ti_amplitude": a_ti,
                 "diff_pct": 100.0 * (a_ti - a_hbm) / a_hbm,
@@ -185,6 +187,7 @@ def time_check(name: str, tm: TimeModel) -> dict[str, Any]:
         "freq_hz": b.freq_hz.tolist(),
         "amp": b.out_amp[:, 0].tolist(),
         "stable": b.stable.tolist(),
+        "stability": b.stability.astype(int).tolist(),
         "points": rows,
         "wall_s": time.perf_counter() - t0,
     }
