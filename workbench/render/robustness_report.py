@@ -111,6 +111,10 @@ def robustness_sections(
             "frequency and the difference to it. A time integration that does not "
             "repeat within its period budget is marked as not converged (its last "
             "period is compared).",
+            "Hill's verdict is unknown where its two selections of Floquet exponents (the "
+            "most centred eigenvectors, and the exponents of the strip |Im| <= w/2) "
+            "disagree: with a stick-slip Jacobian neither is exact away from a fold. Such "
+            "points are listed apart in the summary and drawn dotted grey.",
         ]
         sections.append(
             {
@@ -120,7 +124,8 @@ def robustness_sections(
                 "figures": [
                     {
                         "path": "figures/hbm_vs_time.png",
-                        "caption": "HBM branches (unstable: dashed) and the "
+                        "caption": "HBM branches (unstable: dashed; stability unknown: "
+                        "dotted grey) and the "
                         "steady time-integration amplitudes at suspect points.",
                     }
                 ],
