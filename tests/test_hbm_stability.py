@@ -309,6 +309,56 @@ def test_a_contested_selection_is_unknown_and_the_orbit_is_indeed_left():
     assert max(dist[15:]) > 2 * max(dist[5:10]), dist
 
 
+def test_a_period_doubling_pair_is_seen_by_the_strip():
+    """A 3-DOF contact system (random matrices, seed 11) whose orbit doubles its period
+    at 80.25 Hz: the pair of Floquet exponents Re +38 1/s, Im = +-w/2 (a real negative
+    multiplier) lies just outside |lambda| <= w/2 and ranks below the 2n most centred
+    eigenvectors, which are all stable. The strip |Im| <= 0.51 w sees it: the dense
+    verdict is unknown (the selections disagree), the sparse path's unstable, never
+    stable; and a time integration started on the orbit ends on a period-2 orbit."""
+    from workbench.errors import SolveError
+    from workbench.hbm.stability import UNKNOWN
+
+    rng = np.random.default_rng(11)
+    n = int(rng.choice([3, 4, 6]))  # the draws of the search that found this case, in order
+    A = rng.normal(size=(n, n))
+    K = A @ A.T * 1e3 + 2e4 * np.eye(n)
+    M = np.diag(rng.uniform(0.02, 0.1, n))
+    choices = ([5e4, 2e5], [0.2, 0.5, 2.0], [0.002, 0.005, 0.01])
+    kn, n0, zeta = (float(rng.choice(c)) for c in choices)
+    assert (n, kn, n0, zeta) == (3, 5e4, 2.0, 0.002)
+    el = ContactElements.from_dofs(n, [[0, 1, 2]], mu=0.3, kt=3e4, kn=kn, n0=n0)
+    s = System(M=M, K=K, zeta=zeta, contacts=el)
+    f1 = rng.normal(size=n) + 0j
+    f_lo = 0.85 * np.sqrt(np.linalg.eigvals(np.linalg.solve(M, K)).real.min()) / TWO_PI
+    fq, level, f = 80.2545456269211, 3 * n0, Fourier(tuple(range(6)))
+    verdicts = {}
+    for path, opts in (("dense", SolverOptions()), ("sparse", SolverOptions(hill_dense_limit=0))):
+        b = frequency_response(s, f1, level, (f_lo, fq), None, harmonics=f.harmonics, options=opts)
+        assert b.completed and b.freq_hz[-1] == pytest.approx(fq, rel=1e-12)
+        verdicts[path] = int(b.stability[-1])
+    assert verdicts == {"dense": UNKNOWN, "sparse": UNSTABLE}
+    w = TWO_PI * fq
+    hb = HarmonicBalance(s, f1, f, None, level)
+    ev = hb.evaluate(b.x[-1], w)
+    st = hill_dense(*hb.hill_dense(ev), w, f.harmonics)
+    assert st.max_real < 0 and "disagree" in st.note  # the centred set alone says stable
+    # time integration from the orbit: after the departure, period ends alternate
+    q, v = f.state_at(hb.response(b.x[-1], w), w)
+    ends = []
+    for _ in range(300):
+        try:
+            tr = time_response(s, f1, level, fq, None, harmonics=f.harmonics, max_periods=1,
+                               q0=q, v0=v)  # fmt: skip
+        except SolveError as e:  # one period is never "periodic": keep it
+            tr = e.partial
+        q, v = tr.q_end, tr.v_end
+        ends.append(q.copy())
+    e = np.array(ends[-4:])
+    one, two = np.linalg.norm(e[3] - e[2]), np.linalg.norm(e[3] - e[1])
+    assert two < 0.01 * one, (one, two)
+
+
 def test_stability_off_is_unknown_not_stable():
     """Without Hill's method the verdict is unknown (-1), never stable, in data and CSV."""
     s = unit_jenkins().system
