@@ -417,30 +417,22 @@ def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str
             f"starting HBM orbit, {max(abs(r['diff_nearest_pct']) for r in rows):.3g} % to the "
             "nearest HBM solution at the same frequency."
         )
-    bad = [r for ch in checks for r in ch["points"] if _verdict(r) == "unstable"]
-    unk = [r for ch in checks for r in ch["points"] if _verdict(r) == "unknown"]
-    if unk:
-        head.append(
-            f"At {len(unk)} suspect point(s) Hill's verdict is unknown (its selections "
-            "disagree); the time integration there: "
-            + "; ".join(
-                f"{r['model']} at {r['freq_hz']:.4g} Hz: "
-                f"{r['diff_pct']:+.3g} %" + ("" if r["ti_converged"] else " (not periodic)")
-                for r in unk
+    for verdict, what in (
+        ("unknown", "Hill's verdict is unknown (its selections disagree)"),
+        ("unstable", "Hill's verdict is unstable"),
+    ):
+        pts = [r for ch in checks for r in ch["points"] if _verdict(r) == verdict]
+        if pts:
+            head.append(
+                f"At {len(pts)} suspect point(s) {what}; the time integration started on the "
+                "orbit ends: "
+                + "; ".join(
+                    f"{r['model']} at {r['freq_hz']:.4g} Hz: {r['diff_pct']:+.3g} %"
+                    + ("" if r["ti_converged"] else " (not periodic)")
+                    for r in pts
+                )
+                + "."
             )
-            + "."
-        )
-    if bad:
-        head.append(
-            f"At {len(bad)} Hill-unstable point(s) the time integration left the HBM "
-            "orbit: "
-            + "; ".join(
-                f"{r['model']} at {r['freq_hz']:.4g} Hz: "
-                f"{r['diff_pct']:+.3g} %" + ("" if r["ti_converged"] else " (not periodic)")
-                for r in bad
-            )
-            + "."
-        )
     return {
         "study": spec.name,
         "kind": "robustness",
