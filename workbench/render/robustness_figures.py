@@ -154,10 +154,10 @@ def plot_hbm_vs_time(checks: Sequence[dict[str, Any]], path: str | Path) -> Path
         a = 1e3 * np.asarray(ch["amp"])  # m -> mm
         # Hill's verdicts, three-valued (a check cached with two reads as stable/unstable)
         v = np.asarray(ch.get("stability", np.where(ch["stable"], 1, 0)), int)
-        for code, style, lab in (
+        for code, style, lab in (  # unknown first: a definite verdict is drawn over it
+            (-1, dict(color="0.55", lw=1.8, ls=":"), "HBM (stability unknown)"),
             (1, dict(color="#1f6fb4", lw=1.4), "HBM (stable)"),
             (0, dict(color="#1f6fb4", lw=1.2, ls="--"), "HBM (Hill-unstable)"),
-            (-1, dict(color="0.55", lw=1.8, ls=":"), "HBM (stability unknown)"),
         ):
             # each piece runs to the next point, so that isolated points still show
             m = (v == code) | np.r_[False, v[:-1] == code]
