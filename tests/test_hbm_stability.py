@@ -390,3 +390,40 @@ def test_count_check_flags_an_ambiguous_selection():
     lam = np.array([-1.0, -2.0 + 1j, -2.0 - 1j])
     keep, _, ok = select_centred(lam, P, harmonics, 2)
     assert not ok and keep.size == 2
+
+
+def _eigvecs(*rows):
+    """Eigenvectors (nh = 5: Q0, Qc1, Qs1, Qc2, Qs2) of one coordinate, one per row."""
+    P = np.zeros((5, 1, len(rows)), complex)
+    for j, r in enumerate(rows):
+        P[:, 0, j] = r
+    return P
+
+
+def test_contested_only_where_the_ranking_can_reverse_the_verdict():
+    """A dropped centred exponent 3 % behind the cut contests a stable kept set when it is
+    unstable; it does not contest an unstable set whose unstable exponent is the most
+    centred of all (swapping the last kept one cannot remove it)."""
+    from workbench.hbm.stability import contested
+
+    harmonics, w = (0, 1, 2), 100.0
+    far = [0, 0, 0, 1, 1j]  # leaning on harmonic 2: ranked last
+    P = _eigvecs([1, 0, 0, 0, 0], [1, 1, 0, 0, 0], [1, 1.06, 0, 0, 0], far, far)
+    stable_set = np.array([-3.0, -5.0, +6.0, -7.0, -8.0])  # rival +6 just behind the cut
+    assert contested(stable_set, P, harmonics, 2, w) == 6.0
+    unstable_set = np.array([+30.0, -5.0, -6.0, -7.0, -8.0])  # +30 has rms 0, far from the cut
+    assert contested(unstable_set, P, harmonics, 2, w) is None
+    at_the_cut = np.array([-3.0, +5.0, -6.0, -7.0, -8.0])  # the unstable one is the last kept
+    assert contested(at_the_cut, P, harmonics, 2, w) == -6.0
+
+
+def test_an_empty_selection_gives_no_second_opinion():
+    """With harmonics 0-1 every strip exponent leans on the top harmonic and is left out:
+    an empty strip must not count as a stable opinion against an unstable kept set (nor an
+    empty kept set against the strip)."""
+    from workbench.hbm.stability import second_opinion
+
+    w, none = 100.0, np.zeros(0, complex)
+    assert second_opinion(np.array([2.0 + 10j]), none, w, 1e-6) == ""
+    assert second_opinion(none, np.array([2.0 + 10j]), w, 1e-6) == ""
+    assert "disagree" in second_opinion(np.array([-2.0]), np.array([2.0 + 10j]), w, 1e-6)

@@ -336,7 +336,8 @@ def _ramp_level(hb: HarmonicBalance, corr: Corrector, w: float, level: float):
 
 def _why(reason: str) -> str:
     """The last corrector failure in words: a PETSc reason is quoted as SNES's."""
-    return f"SNES: {reason}" if reason.split(" ")[0].isupper() else reason
+    first = reason.split(" ")[0]
+    return f"SNES: {reason}" if first.isupper() or first.lstrip("-").isdigit() else reason
 
 
 def _stability(
@@ -459,7 +460,6 @@ def _arclength(
             res = corr.solve_arclength(yp[:nx] * u_ref, yp[nx] * w_ref, sph)
             if res.converged and norm(y_of(res.x, res.omega) - prev, a) < 0.5 * ds:
                 res.converged = False  # the sphere's other cut: back where we came from
-                res.reason = "converged back onto the previous point (rejected)"
             if not res.converged:
                 # a fold exactly at a kink can turn the branch back almost on itself: try
                 # the plane ahead along the secant with its frequency part reversed, and keep

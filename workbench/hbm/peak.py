@@ -51,7 +51,8 @@ def refine_peaks(
     A trial that does not converge, or converges onto a state where the
     damper has lost contact (singular: the continuation stops at such a
     point), counts as failed and is never chosen; the frequencies of the
-    latter are listed in ``corr.stats["peak_trials_lost_contact"]``.
+    latter are listed in ``corr.stats["peak_trials_lost_contact"]`` (set only
+    when there are any).
 
     Returns, per key, the best trial (frequency in Hz, x, Newton iterations,
     its position in frequency order) when it beats the computed points, else
@@ -68,7 +69,7 @@ def refine_peaks(
         if max(l1, l2) <= min(h1, h2):
             spans = dict.fromkeys(spans, (min(l1, l2), max(h1, h2)))
     xs = rec.rows["x"]
-    lost = corr.stats.setdefault("peak_trials_lost_contact", [])  # Hz, for the branch message
+    lost: list[float] = []  # Hz of trials without contact, for the branch message
     cache: dict[float, tuple[Any, np.ndarray, int]] = {}  # Hz -> (point data, x, its)
     found: dict[str, tuple[float, np.ndarray, int, int] | None] = {}
     for key, (lo, hi) in spans.items():
@@ -103,6 +104,8 @@ def refine_peaks(
         grid = np.linspace(fb[0], fb[-1], N_GRID + 2)[1:-1]
         hit = _search(key, solve, cache, branch, grid, opts)
         found[key] = hit and (*hit, int(np.searchsorted(fb, hit[0])) + lo)
+    if lost:
+        corr.stats["peak_trials_lost_contact"] = lost
     return [found.get(k) for k in keys]
 
 

@@ -248,22 +248,30 @@ def contested(
     families: more than ``n_keep`` can be centred (``|kbar| < 1/2``), and the
     ranking by RMS harmonic index then decides between near-equals. When a
     dropped centred exponent whose RMS index is within :data:`RANK_MARGIN`
-    of the last kept one is unstable while the kept set is stable (or the
-    reverse), the verdict rests on that ranking and is not trustworthy; this
-    returns that exponent (else None).
+    of the last kept one is unstable while the kept set is stable, or when
+    every unstable kept exponent is that near the cut and as many stable
+    rivals are, the verdict rests on that ranking and is not trustworthy;
+    this returns a rival (else None).
     """
     kb, rms = mean_harmonic(P, harmonics, moments=True)
     ok = np.isfinite(lam)
     order = np.argsort(np.where(ok, rms, np.inf), kind="stable")
     keep, drop = order[:n_keep], order[n_keep:]
-    unstable = lam[keep].real.max(initial=-np.inf) > tol * omega
-    near = drop[
-        ok[drop]
-        & (np.abs(kb[drop]) < 0.5)
-        & (rms[drop] <= (1 + RANK_MARGIN) * rms[keep[-1]])
-        & ((lam[drop].real > tol * omega) != unstable)
-    ]
-    return complex(lam[near[0]]) if near.size else None
+    if not keep.size:
+        return None
+    cut = rms[keep[-1]]
+    bad = lam.real > tol * omega
+    near = drop[ok[drop] & (np.abs(kb[drop]) < 0.5) & (rms[drop] <= (1 + RANK_MARGIN) * cut)]
+    if not bad[keep].any():  # a stable set: one unstable rival near the cut can reverse it
+        rivals = near[bad[near]]
+        return complex(lam[rivals[0]]) if rivals.size else None
+    # an unstable set is reversed only if every unstable kept exponent is near the cut and
+    # as many stable rivals could take their places
+    u = keep[bad[keep]]
+    rivals = near[~bad[near]]
+    if np.all(rms[u] * (1 + RANK_MARGIN) >= cut) and rivals.size >= u.size:
+        return complex(lam[rivals[0]])
+    return None
 
 
 STRIP = 0.51  # half-width of the strip |Im lambda| <= STRIP w of the second selection
@@ -306,11 +314,12 @@ def second_opinion(kept: np.ndarray, disc: np.ndarray, omega: float, tol: float)
     families (a family whose centred copy lies far from 0 is seen by the
     second only, one whose strip copy leans on a high harmonic by the first
     only); where they reach opposite verdicts, neither is trusted. An empty
-    ``kept`` set gives no opinion.
+    set gives no opinion (with harmonics 0-1 every strip exponent leans on
+    the top harmonic).
     """
     a = float(kept.real.max(initial=-np.inf))
     b = float(disc.real.max(initial=-np.inf))
-    if not kept.size or (a > tol * omega) == (b > tol * omega):
+    if not kept.size or not disc.size or (a > tol * omega) == (b > tol * omega):
         return ""
     return (
         f"Hill's two selections disagree: the most centred exponents give max Re {a:.4g} "

@@ -66,7 +66,8 @@ def robustness_sections(
                 {
                     "path": "figures/robustness_curves.png",
                     "caption": "Each hard case: the branch of every method (peak response "
-                    "of blade 1 against frequency); a failed branch ends with a cross.",
+                    "of blade 1 against frequency); a failed branch ends with a cross; a grey "
+                    "underlay marks points Hill does not call stable (unstable or unknown).",
                 },
             ],
             "tables": [
@@ -111,10 +112,12 @@ def robustness_sections(
             "frequency and the difference to it. A time integration that does not "
             "repeat within its period budget is marked as not converged (its last "
             "period is compared).",
-            "Hill's verdict is unknown where its two selections of Floquet exponents (the "
-            "most centred eigenvectors, and the exponents of the strip |Im| <= w/2) "
-            "disagree: with a stick-slip Jacobian neither is exact away from a fold. Such "
-            "points are listed apart in the summary and drawn dotted grey.",
+            "Hill's verdict is unknown where its selection of Floquet exponents cannot be "
+            "trusted: the count check fails, a dropped exponent of the other verdict nearly "
+            "made the cut, or the most centred eigenvectors and the exponents of the strip "
+            "|Im| <= w/2 reach opposite verdicts (with a stick-slip Jacobian neither is exact "
+            "away from a fold). Such points are listed apart in the summary and drawn dotted "
+            "grey.",
         ]
         sections.append(
             {

@@ -206,6 +206,7 @@ _CELL_COLS = (
     "band_fraction",
     "n_turning_points",
     "n_unstable",
+    "n_stability_unknown",
     "max_status",
     "n_unknowns",
     "energy_residual_max",
@@ -257,7 +258,10 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     _write_csv(out / "cells.csv", cells, _CELL_COLS)
     write_json(
         out / "cells.json",
-        [{k: v for k, v in c.items() if k not in ("freq_hz", "amp", "stable")} for c in cells],
+        [
+            {k: v for k, v in c.items() if k not in ("freq_hz", "amp", "stable", "stability")}
+            for c in cells
+        ],
     )
     map_rows = [{**c, "wall_s": round(c["wall_s"], 2)} for c in cells]
     _write_csv(
@@ -418,7 +422,7 @@ def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str
             "nearest HBM solution at the same frequency."
         )
     for verdict, what in (
-        ("unknown", "Hill's verdict is unknown (its selections disagree)"),
+        ("unknown", "Hill's verdict is unknown"),
         ("unstable", "Hill's verdict is unstable"),
     ):
         pts = [r for ch in checks for r in ch["points"] if _verdict(r) == verdict]

@@ -124,6 +124,7 @@ def run_cell(problem: Problem, method: str) -> dict[str, Any]:
             freq_hz=[],
             amp=[],
             stable=[],
+            stability=[],
         )
     else:
         s = branch.summary()
@@ -139,6 +140,7 @@ def run_cell(problem: Problem, method: str) -> dict[str, Any]:
             freq_hz=branch.freq_hz.tolist(),
             amp=branch.out_amp[:, 0].tolist() if branch.n_points else [],
             stable=branch.stable.tolist(),
+            stability=branch.stability.astype(int).tolist(),
             max_status=int(branch.status.max()) if branch.status.size else 0,
             separated_share=float(np.mean(branch.status >= 2)) if branch.status.size else 0.0,
         )
@@ -158,7 +160,10 @@ def _describe(rec: dict[str, Any]) -> dict[str, Any]:
     tp = turning_points(f)
     rec["n_turning_points"] = int(tp.size)
     rec["turning_points_hz"] = [round(float(f[j]), 4) for j in tp]
-    rec["n_unstable"] = int(np.sum(~np.asarray(rec["stable"], dtype=bool)))
+    v = rec.get("stability")  # Hill's verdicts (a cell cached before they were three-valued:
+    v = np.asarray(v if v is not None else np.where(rec["stable"], 1, 0), dtype=int)  # two)
+    rec["n_unstable"] = int(np.sum(v == 0))
+    rec["n_stability_unknown"] = int(np.sum(v < 0))
     rec["succeeded"] = bool(not rec["failed"] and rec["completed"])
     return rec
 
