@@ -70,12 +70,14 @@ def _kinds(study, sdof_branches):
         for n, x, e in zip((16, 64, 256), t, (2.0, 0.1, 0.0), strict=True)
     ]
     f = np.linspace(80, 170, 40)
+    verdicts = np.r_[np.ones(30, int), -np.ones(5, int), np.zeros(5, int)]  # all three kinds
     check = dict(
         model="sdof",
         n_dofs=1,
         freq_hz=f,
         amp=1e-4 / (1 + ((f - 120) / 8) ** 2),
-        stable=np.ones(40, bool),
+        stable=verdicts == 1,
+        stability=verdicts,
         points=[dict(freq_hz=120.0, ti_amplitude=1e-4, ti_converged=True, diff_pct=0.1)],
     )
     return {

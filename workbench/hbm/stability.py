@@ -305,11 +305,11 @@ def in_strip(
     )
 
 
-def second_opinion(kept: np.ndarray, disc: np.ndarray, omega: float, tol: float) -> str:
+def second_opinion(kept: np.ndarray, strip: np.ndarray, omega: float, tol: float) -> str:
     """Why the verdicts of two selections differ, or "" when they agree.
 
     ``kept``: the most centred exponents (one per family, by eigenvector);
-    ``disc``: those of :func:`in_strip` (one per family, by position). With a
+    ``strip``: those of :func:`in_strip` (one per family, by position). With a
     stick-slip Jacobian the two can pick different members or different
     families (a family whose centred copy lies far from 0 is seen by the
     second only, one whose strip copy leans on a high harmonic by the first
@@ -318,8 +318,8 @@ def second_opinion(kept: np.ndarray, disc: np.ndarray, omega: float, tol: float)
     the top harmonic).
     """
     a = float(kept.real.max(initial=-np.inf))
-    b = float(disc.real.max(initial=-np.inf))
-    if not kept.size or not disc.size or (a > tol * omega) == (b > tol * omega):
+    b = float(strip.real.max(initial=-np.inf))
+    if not kept.size or not strip.size or (a > tol * omega) == (b > tol * omega):
         return ""
     return (
         f"Hill's two selections disagree: the most centred exponents give max Re {a:.4g} "
@@ -411,10 +411,10 @@ def hill_arpack(
     note = f"the {k} exponents nearest 0 (cap n_floquet_max) do not cover |lambda| <= w/2"
     other = ""
     if covered:  # every exponent out to the farthest found: the strip's are complete there
-        disc = lam[in_strip(lam, P, harmonics, omega, radius=float(np.max(np.abs(lam))))]
-        other = second_opinion(keep, disc, omega, tol)
+        strip = lam[in_strip(lam, P, harmonics, omega, radius=float(np.max(np.abs(lam))))]
+        other = second_opinion(keep, strip, omega, tol)
         if not keep.size:  # no centred exponent in the disc: the strip's decide alone
-            keep = disc
+            keep = strip
     return _verdict(
         keep,
         omega,

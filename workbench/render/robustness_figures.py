@@ -152,8 +152,7 @@ def plot_hbm_vs_time(checks: Sequence[dict[str, Any]], path: str | Path) -> Path
     for ax, ch in zip(axes[0], checks, strict=True):
         f = np.asarray(ch["freq_hz"])
         a = 1e3 * np.asarray(ch["amp"])  # m -> mm
-        # Hill's verdicts, three-valued (a check cached with two reads as stable/unstable)
-        v = np.asarray(ch.get("stability", np.where(ch["stable"], 1, 0)), int)
+        v = np.asarray(ch["stability"], int)  # Hill's verdicts: 1, 0, -1 (unknown)
         for code, style, lab in (  # unknown first: a definite verdict is drawn over it
             (-1, dict(color="0.55", lw=1.8, ls=":"), "HBM (stability unknown)"),
             (1, dict(color="#1f6fb4", lw=1.4), "HBM (stable)"),

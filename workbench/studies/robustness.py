@@ -214,11 +214,6 @@ _CELL_COLS = (
 )
 
 
-def _verdict(row: dict) -> str:
-    """A time-check row's Hill verdict (rows cached before verdicts were three-valued: two)."""
-    return row.get("hill_verdict") or ("stable" if row["hill_stable"] else "unstable")
-
-
 def _write_csv(path: Path, rows: list[dict[str, Any]], cols: tuple[str, ...]) -> Path:
     return write_rows_csv(path, rows, cols, digits=6)
 
@@ -425,7 +420,7 @@ def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str
         ("unknown", "Hill's verdict is unknown"),
         ("unstable", "Hill's verdict is unstable"),
     ):
-        pts = [r for ch in checks for r in ch["points"] if _verdict(r) == verdict]
+        pts = [r for ch in checks for r in ch["points"] if r["hill_verdict"] == verdict]
         if pts:
             head.append(
                 f"At {len(pts)} suspect point(s) {what}; the time integration started on the "

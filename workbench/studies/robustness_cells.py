@@ -160,8 +160,7 @@ def _describe(rec: dict[str, Any]) -> dict[str, Any]:
     tp = turning_points(f)
     rec["n_turning_points"] = int(tp.size)
     rec["turning_points_hz"] = [round(float(f[j]), 4) for j in tp]
-    v = rec.get("stability")  # Hill's verdicts (a cell cached before they were three-valued:
-    v = np.asarray(v if v is not None else np.where(rec["stable"], 1, 0), dtype=int)  # two)
+    v = np.asarray(rec["stability"], dtype=int)  # Hill's verdicts: 1, 0, -1 (unknown)
     rec["n_unstable"] = int(np.sum(v == 0))
     rec["n_stability_unknown"] = int(np.sum(v < 0))
     rec["succeeded"] = bool(not rec["failed"] and rec["completed"])
