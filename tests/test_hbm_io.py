@@ -25,6 +25,7 @@ def test_branch_round_trip(tmp_path):
         "freq_hz",
         "stable",
         "stability",
+        "stability_how",
         "status",
         "friction_energy",
         "x",
@@ -37,10 +38,18 @@ def test_branch_round_trip(tmp_path):
     assert c.output_names == ("x", "z") and c.label == "two dof" and c.completed
     assert c.summary()["peak_frequency_hz"] == b.summary()["peak_frequency_hz"]
     csv = b.to_csv(tmp_path / "b.csv", unit_scale=1e3, unit="mm").read_text().splitlines()
-    head = "freq_hz,stable,stability,newton_its,energy_residual,accuracy,x_amp_mm"
+    head = "freq_hz,stable,stability,stability_how,newton_its,energy_residual,accuracy,x_amp_mm"
     assert csv[0].startswith(head)
     words = {line.split(",")[2] for line in csv[1:]}
-    assert words <= {"stable", "unstable", "unknown"} and words
+    verdicts = {"stable", "unstable", "unknown", "stable (carried)", "unstable (carried)"}
+    assert words <= verdicts and words
+    hows = [line.split(",")[3] for line in csv[1:]]
+    assert set(hows) <= {"none", "hill", "linear", "carried"}
+    # a carried verdict says so in both columns, and is never "stable" in the first
+    for line in csv[1:]:
+        c = line.split(",")
+        assert (c[3] == "carried") == c[2].endswith("(carried)")
+        assert c[1] == str(int(c[2] == "stable"))
     assert len(csv) == b.n_points + 1
     assert not list(tmp_path.glob(".*part"))  # atomic writes leave no temporary file
 

@@ -16,7 +16,16 @@ from workbench.hbm import (
 )
 from workbench.hbm.corrector import Corrector, Factorization
 from workbench.hbm.examples import sdof_jenkins, sdof_unilateral, two_dof_contact, unit_jenkins
-from workbench.hbm.stability import STABLE, UNSTABLE, hill_arpack, hill_dense, hill_eig
+from workbench.hbm.stability import (
+    CARRIED_STABLE,
+    CARRIED_UNSTABLE,
+    STABLE,
+    UNSTABLE,
+    hill_arpack,
+    hill_dense,
+    hill_eig,
+)
+from workbench.hbm.stability_path import HOW_HILL
 
 TWO_PI = 2 * np.pi
 HARM = tuple(range(8))
@@ -99,13 +108,17 @@ def test_continuation_passes_the_turning_points(unilateral):
 
 
 def test_hill_flags_exactly_the_middle_branch(unilateral):
-    """The points between the two folds are the unstable ones (a saddle-node pair)."""
+    """The points between the two folds are the unstable ones (a saddle-node pair): checked
+    unstable, or carried unstable between checked unstable points; the points around each
+    fold are checked, not carried."""
     ex, b = unilateral
     back = np.flatnonzero(np.diff(b.freq_hz) < 0)
     middle = np.zeros(b.n_points, bool)
     middle[back.min() + 1 : back.max() + 1] = True  # points strictly after the first fold
-    unstable = b.unstable
+    unstable = b.unstable | (b.stability == CARRIED_UNSTABLE)
     assert not b.unknown.any()
+    for fold in (back.min(), back.max() + 1):  # the extreme-frequency point of each fold
+        assert (b.stability_how[fold - 1 : fold + 2] == HOW_HILL).all()
     # allow the fold points themselves either way (an exponent crosses zero there)
     inner = middle.copy()
     inner[[back.min() + 1, back.max()]] = False
@@ -164,7 +177,8 @@ def test_frequency_stepping_cannot_follow_the_fold(unilateral):
         options=SolverOptions(continuation="frequency"),
     )
     assert np.all(np.diff(s.freq_hz) > 0)
-    assert np.all(s.stable)
+    # stable everywhere: checked (or linear) stable, or carried stable between such points
+    assert np.all(s.stable | (s.stability == CARRIED_STABLE))
     if s.failed:
         assert "turning point" in s.message and s.n_points > 3
 
@@ -217,7 +231,11 @@ def test_a_peak_trial_without_contact_is_never_the_peak(monkeypatch):
 def jenkins_branch():
     s = unit_jenkins().system
     band = (0.5 / TWO_PI, 3.0 / TWO_PI)
-    return s, frequency_response(s, np.array([1.0 + 0j]), 1.0, band, [0], harmonics=HARM)
+    # Hill's method at every point (stability_stride 1): the verdicts themselves are tested
+    opts = SolverOptions(stability_stride=1)
+    return s, frequency_response(
+        s, np.array([1.0 + 0j]), 1.0, band, [0], harmonics=HARM, options=opts
+    )
 
 
 def test_jenkins_oscillator_is_stable_everywhere(jenkins_branch):

@@ -3,8 +3,12 @@
 Per point ``i`` (in continuation order, so a curve that turns back keeps
 its order): ``freq_hz[i]``; ``stability[i]`` (Hill's verdict: 1 stable,
 0 unstable, -1 unknown: not computed, eigen-solver failure or a failed
-count check) and ``stable[i]`` (True only for a stable verdict; use
-:attr:`Branch.unstable` / :attr:`Branch.unknown` for the others); ``newton_its[i]``;
+count check; 2 and 3: stable or unstable carried from checked neighbours,
+not established at the point, see :mod:`.stability_path`),
+``stability_how[i]`` (0 not computed, 1 Hill's method at the point, 2 every
+contact stuck: the linear system's verdict, 3 carried) and ``stable[i]``
+(True only for an established stable verdict; use :attr:`Branch.unstable`,
+:attr:`Branch.unknown` and :attr:`Branch.carried` for the others); ``newton_its[i]``;
 ``energy_residual[i]`` (relative, work of the excitation against viscous +
 contact work per cycle); ``accuracy[i]`` (the loop-energy vs harmonic-work
 mismatch, a fraction of the excitation work: it grows when ``nt`` or the
@@ -33,6 +37,7 @@ _ARRAYS = (
     "freq_hz",
     "stable",
     "stability",
+    "stability_how",
     "newton_its",
     "energy_residual",
     "out_amp",
@@ -63,7 +68,8 @@ class Branch:
     space: str = "condensed"
     freq_hz: np.ndarray = field(default_factory=lambda: np.zeros(0))
     stable: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
-    stability: np.ndarray | None = None  # int8: 1 stable, 0 unstable, -1 unknown
+    stability: np.ndarray | None = None  # int8: 1 stable, 0 unstable, -1 unknown, 2/3 carried
+    stability_how: np.ndarray | None = None  # int8: 0 none, 1 Hill, 2 linear, 3 carried
     newton_its: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
     energy_residual: np.ndarray = field(default_factory=lambda: np.zeros(0))
     out_amp: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
@@ -93,6 +99,10 @@ class Branch:
             # a record without verdicts (older files): stable or unstable as stored
             self.stability = self.stable.astype(np.int8)
         self.stability = np.asarray(self.stability, dtype=np.int8)
+        if self.stability_how is None or np.size(self.stability_how) != self.stable.size:
+            # older files: Hill's method ran at every point where a verdict is stored
+            self.stability_how = np.where(self.stability >= 0, 1, 0)
+        self.stability_how = np.asarray(self.stability_how, dtype=np.int8)
         if self.out_rms is None or np.shape(self.out_rms) != np.shape(self.out_amp):
             # older files: from the stored output harmonics (Q0^2 + sum (Qc^2 + Qs^2) / 2)
             w = np.concatenate([[1.0] if h == 0 else [0.5, 0.5] for h in self.harmonics])
@@ -108,7 +118,7 @@ class Branch:
 
     @property
     def unstable(self) -> np.ndarray:
-        """(n_points,) bool: Hill found an exponent with a positive real part."""
+        """(n_points,) bool: Hill found an exponent with a positive real part at the point."""
         return self.stability == 0
 
     @property
@@ -116,9 +126,16 @@ class Branch:
         """(n_points,) bool: stability not determined (off, solver failure, count check)."""
         return self.stability < 0
 
+    @property
+    def carried(self) -> np.ndarray:
+        """(n_points,) bool: the verdict of the checked neighbours, not computed at the point."""
+        return self.stability >= 2
+
     def stability_name(self, i: int) -> str:
-        """ "stable", "unstable" or "unknown" at point ``i``."""
-        return ("unknown", "unstable", "stable")[int(self.stability[i]) + 1]
+        """ "stable", "unstable", "unknown", "stable (carried)" or "unstable (carried)"."""
+        from .stability import VERDICT_NAMES
+
+        return VERDICT_NAMES.get(int(self.stability[i]), "unknown")
 
     @property
     def n_points(self) -> int:
@@ -168,6 +185,9 @@ class Branch:
             n_points=self.n_points,
             n_unstable=int(np.sum(self.unstable)),
             n_stability_unknown=int(np.sum(self.unknown)),
+            n_stable_carried=int(np.sum(self.stability == 2)),
+            n_unstable_carried=int(np.sum(self.stability == 3)),
+            n_hill_checks=int(np.sum(self.stability_how == 1)),
             wall_s=round(float(self.timings.get("total", 0.0)), 4),
             energy_residual_max=float(np.max(self.energy_residual)) if self.n_points else None,
             accuracy_max=_nanmax(self.accuracy),
@@ -230,7 +250,8 @@ class Branch:
         """One row per point: frequency, stability, per-output amplitudes, energies."""
         from ..io import write_text
 
-        cols = ["freq_hz", "stable", "stability", "newton_its", "energy_residual", "accuracy"]
+        cols = ["freq_hz", "stable", "stability", "stability_how", "newton_its"]
+        cols += ["energy_residual", "accuracy"]
         for nm in self.output_names:
             cols += [f"{nm}_amp_{unit}", f"{nm}_h1_{unit}", f"{nm}_rms_{unit}"]
         cols += [
@@ -248,6 +269,7 @@ class Branch:
                 f"{self.freq_hz[i]:.9g}",
                 str(int(self.stable[i])),
                 self.stability_name(i),
+                ("none", "hill", "linear", "carried")[int(self.stability_how[i])],
                 str(int(self.newton_its[i])),
                 f"{self.energy_residual[i]:.3e}",
                 f"{self.accuracy[i]:.3e}",

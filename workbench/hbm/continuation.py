@@ -28,14 +28,14 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import InputError, check_range
-from .balance import Evaluation, HarmonicBalance, observation
+from .balance import HarmonicBalance, observation
 from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
 from .fourier import Fourier, default_nt
 from .options import SolverOptions
 from .peak import insert_peaks, refine_peaks
-from .stability import UNKNOWN, Stability, hill_arpack, hill_dense
-from .stability import unknown as stability_unknown
+from .stability import STABLE, UNKNOWN
+from .stability_path import HOW_NONE, StabilityPath
 from .system import System
 
 log = logging.getLogger(__name__)
@@ -77,6 +77,7 @@ class _Recorder:
                 out[k] = np.zeros(shapes.get(k, (0,)))
         out["stable"] = out["stable"].astype(bool)
         out["stability"] = out["stability"].astype(np.int8)
+        out["stability_how"] = out["stability_how"].astype(np.int8)
         out["status"] = out["status"].astype(np.int8)
         out["newton_its"] = out["newton_its"].astype(int)
         return out
@@ -138,8 +139,9 @@ def frequency_response(
     band_s = (w1 - w0) / w0
     rec = _Recorder()
     timings = dict(setup=time.perf_counter() - t_start, stability=0.0, post=0.0)
-    # loop state: largest solution norm, points, Hill's ARPACK start vector and dense blocks
-    state = dict(xi=1e-300, n=0, hill_v0=None, parts=None, hill_k=None)
+    # loop state: largest solution norm, points
+    state = dict(xi=1e-300, n=0)
+    path = StabilityPath(hb, corr, opts) if opts.stability else None
     message, failed, completed = "", False, False
 
     from ..log import progress_bar
@@ -161,17 +163,15 @@ def frequency_response(
                 "singular state); lower the excitation or raise the preload",
                 failed=True,
             )
-        if opts.stability:
-            t0 = time.perf_counter()
-            st = _stability(hb, corr, ev, opts, state["hill_v0"], state)
-            state["hill_v0"] = st.start
-            timings["stability"] += time.perf_counter() - t0
+        if path is not None:
+            verdict, max_real, how = path.at_point(ev)
         else:
-            st = stability_unknown("stability off")
+            verdict, max_real, how = UNKNOWN, float("nan"), HOW_NONE
         rec.add(
             freq_hz=w / TWO_PI,
-            stable=st.stable,
-            stability=st.verdict,
+            stable=verdict == STABLE,
+            stability=verdict,
+            stability_how=how,
             newton_its=its,
             energy_residual=pd.energy_residual,
             accuracy=pd.accuracy,
@@ -186,7 +186,7 @@ def frequency_response(
             work_visc=pd.work_visc,
             work_friction=pd.work_friction,
             work_normal=pd.work_normal,
-            max_floquet_real=st.max_real,
+            max_floquet_real=max_real,
         )
         xd = x / u_ref
         if fourier.has_dc:
@@ -229,16 +229,26 @@ def frequency_response(
         message = f"stopped by a numerical error{at} ({n} points kept): {type(e).__name__}: {e}"
         log.warning("%s", message)
     try:
-        if opts.refine_peak and len(rec.rows["freq_hz"]) >= 3:
-            t0 = time.perf_counter()
-            insert_peaks(rec, record, refine_peaks(hb, corr, opts, rec))
-            timings["peak"] = time.perf_counter() - t0
-    except _Stop as stop:  # a lost contact found while refining: report, keep the branch
-        message = message or str(stop)
-        failed = failed or stop.failed
+        try:
+            if opts.refine_peak and len(rec.rows["freq_hz"]) >= 3:
+                t0 = time.perf_counter()
+                insert_peaks(rec, record, refine_peaks(hb, corr, opts, rec))
+                timings["peak"] = time.perf_counter() - t0
+        except _Stop as stop:  # a lost contact found while refining: report, keep the branch
+            message = message or str(stop)
+            failed = failed or stop.failed
+        if path is not None:  # the verdicts decided once the branch is complete
+            try:
+                path.finish(rec.rows)
+            except (np.linalg.LinAlgError, FloatingPointError, ArithmeticError, RuntimeError) as e:
+                path.abandon(rec.rows, f"{type(e).__name__}: {e}")
     finally:
         bar_ctx.__exit__(None, None, None)
         corr.destroy()
+    if path is not None:
+        timings["stability"] = path.time
+        corr.stats.update({f"stability_{k}": v for k, v in path.summary().items()})
+        corr.stats["n_stability_unknown"] = path.stats["n_unknown"]
     lost = corr.stats.get("peak_trials_lost_contact") or []
     if lost:  # trials between branch points that found the damper without contact: not used
         note = (
@@ -338,47 +348,6 @@ def _why(reason: str) -> str:
     """The last corrector failure in words: a PETSc reason is quoted as SNES's."""
     first = reason.split(" ")[0]
     return f"SNES: {reason}" if first.isupper() or first.lstrip("-").isdigit() else reason
-
-
-def _stability(
-    hb: HarmonicBalance,
-    corr: Corrector,
-    ev: Evaluation,
-    opts: SolverOptions,
-    v0: np.ndarray | None = None,
-    hill_parts: dict | None = None,
-) -> Stability:
-    """Hill's verdict at the evaluation ``ev`` of a solution; ``v0`` the previous ARPACK vector;
-    ``hill_parts`` a dict holding the branch's :class:`HillParts` (built on first use)."""
-    hill_parts = {} if hill_parts is None else hill_parts
-    x, w = ev.x, ev.omega
-    size = 2 * hb.lin.n_z * hb.fourier.nh
-    if size <= opts.hill_dense_limit:
-        if hill_parts.get("parts") is None:
-            hill_parts["parts"] = hb.hill_parts()
-        d0, d1, d2 = hb.hill_dense(ev, hill_parts["parts"])
-        return hill_dense(d0, d1, d2, w, hb.fourier.harmonics, opts.unstable_tol)
-    lu = corr.factor(x / corr.u_ref, w / corr.w_ref)
-    refine = 1 if lu.dtype == np.float32 else 0
-    size, op = hb.hill_shift_invert(lu.ev, lambda b: lu.solve(b, refine=refine))
-    try:
-        st = hill_arpack(
-            size,
-            op,
-            w,
-            hb.fourier.harmonics,
-            max(opts.n_floquet, hill_parts.get("hill_k") or 0),
-            opts.unstable_tol,
-            v0=v0,
-            n_max=opts.n_floquet_max,
-        )
-    except Exception as e:  # noqa: BLE001 - ARPACK breakdown: say so, keep the point
-        log.warning("Hill's method failed at %.6g Hz (%s): stability unknown", w / TWO_PI, e)
-        st = stability_unknown(f"ARPACK failed: {e}", "arpack")
-    hill_parts["hill_k"] = st.n_exp
-    if st.verdict == UNKNOWN:
-        corr.stats["n_stability_unknown"] = corr.stats.get("n_stability_unknown", 0) + 1
-    return st
 
 
 def _arclength(

@@ -114,7 +114,18 @@ class SolverOptions:
         hi=0.1,
     )
     # stability
-    stability: bool = param(True, "Hill's method at every point")
+    stability: bool = param(
+        True,
+        "Hill's stability: established where it can change, carried between "
+        "(workbench.hbm.stability_path)",
+    )
+    stability_stride: int = param(
+        8,
+        "most points between two Hill checks where some contact slips or separates (fewer "
+        "where the least-damped exponent nears the axis; 1: every point)",
+        lo=1,
+        hi=1000,
+    )
     n_floquet: int = param(6, "Floquet exponents ARPACK starts with (large systems)", lo=1, hi=200)
     n_floquet_max: int = param(
         48,

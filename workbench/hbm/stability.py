@@ -68,7 +68,16 @@ import numpy as np
 import scipy.linalg as sla
 
 STABLE, UNSTABLE, UNKNOWN = 1, 0, -1
-VERDICT_NAMES = {STABLE: "stable", UNSTABLE: "unstable", UNKNOWN: "unknown"}
+# a verdict carried to a point from checked neighbours (workbench.hbm.stability_path): the
+# neighbours' verdict, not established at the point itself
+CARRIED_STABLE, CARRIED_UNSTABLE = 2, 3
+VERDICT_NAMES = {
+    STABLE: "stable",
+    UNSTABLE: "unstable",
+    UNKNOWN: "unknown",
+    CARRIED_STABLE: "stable (carried)",
+    CARRIED_UNSTABLE: "unstable (carried)",
+}
 
 
 @dataclass
@@ -83,7 +92,8 @@ class Stability:
     count_ok: bool = True  # the centred-eigenvector count check passed
     note: str = ""  # why the verdict is unknown
     start: np.ndarray | None = None  # ARPACK start vector for the next point
-    n_exp: int = 0  # exponents ARPACK was asked for (the next point starts there)
+    n_exp: int = 0  # exponents ARPACK was asked for
+    n_disc: int = 0  # exponents found inside |lambda| <= w/2 (the next point starts near it)
 
     @property
     def stable(self) -> bool:
@@ -406,6 +416,7 @@ def hill_arpack(
             break
         k = min(2 * k, n_max)
     start = (vec.real + vec.imag).sum(axis=1)
+    n_disc = int(np.sum(np.abs(lam) <= 0.5 * omega))
     P = vec[: nh * n][:, nz].reshape(nh, n, -1)
     keep = lam[_centred(P, harmonics)]
     note = f"the {k} exponents nearest 0 (cap n_floquet_max) do not cover |lambda| <= w/2"
@@ -427,4 +438,5 @@ def hill_arpack(
         count_ok=covered and not other,
         start=start,
         n_exp=k,
+        n_disc=n_disc,
     )
