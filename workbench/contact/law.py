@@ -26,8 +26,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .laws import LAWS
-from .laws._common import SLIP_TOL  # noqa: F401 - re-exported: the status threshold
+from .laws import (
+    LAWS,
+    SLIP_TOL,  # noqa: F401 - re-exported: the status threshold
+)
 from .march import march
 
 STUCK, STICK_SLIP, PARTIAL_SEPARATION, FULL_SEPARATION = 0, 1, 2, 3
@@ -49,6 +51,7 @@ def aft_march(
     n0: np.ndarray,
     law: int | str,
     want_jac: bool = True,
+    active: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """March the law (name, or its index in ``LAWS``) until the loop repeats; see :func:`march`.
 
@@ -57,7 +60,7 @@ def aft_march(
     ``F`` (n_el, 3, nh), ``J`` (n_el, 3, nh, 3, nh, N/m) or None, ``n_slip``,
     ``n_sep``, ``contact`` and ``periods`` (periods marched per element).
     """
-    return march(u, E, P, mu, kt1, kt2, kn, n0, _law_name(law), want_jac)
+    return march(u, E, P, mu, kt1, kt2, kn, n0, _law_name(law), want_jac, active=active)
 
 
 def march_samples(u: np.ndarray, elements) -> dict[str, np.ndarray]:

@@ -23,7 +23,6 @@ import logging
 import types
 
 import numpy as np
-from numba import njit
 
 from .laws import Law, get_law
 
@@ -43,6 +42,8 @@ def specialise(py_func, law: Law, prefix: str):
     """
     key = (py_func.__qualname__, law.name)
     if key not in _kernels:
+        from numba import njit
+
         g = dict(py_func.__globals__)
         g["step"] = law.step
         name = f"{prefix}_{law.name}"
@@ -57,12 +58,13 @@ step = None  # the law's step: bound per law by specialise()
 
 
 def _march_py(
-    ns, u, E, P, mu, kt1, kt2, kn, n0, want_jac, tol, max_periods,
+    ns, u, E, P, mu, kt1, kt2, kn, n0, active, want_jac, tol, max_periods,
     f, F, J, n_slip, n_sep, contact, periods, converged,
 ):  # fmt: skip
     n_el, nt, _ = u.shape
     nh = E.shape[1]
     m = 3 * nh
+    cols = np.zeros(m, dtype=np.int64)  # the active columns (direction b, harmonic h) of e
     s = np.zeros(ns)
     s_new = np.zeros(ns)
     s_start = np.zeros(ns)
@@ -79,6 +81,14 @@ def _march_py(
     for e in range(n_el):
         s[:] = 0.0
         ds[:, :] = 0.0
+        # only the directions whose displacement can vary carry derivatives: an inactive
+        # direction's displacement is zero and its force acts on nothing (a zero row of W)
+        nc = 0
+        for b in range(3):
+            if active[e, b]:
+                for h in range(nh):
+                    cols[nc] = b * nh + h
+                    nc += 1
         p = 0
         same = False
         while p < max_periods:
@@ -93,35 +103,41 @@ def _march_py(
                 f[e, j, 1] = fj[1]
                 f[e, j, 2] = fj[2]
                 if want_jac:
-                    # the law's derivatives are sparse: only their non-zero entries are used
+                    # the law's derivatives are sparse: only their non-zero entries are used,
+                    # on the active columns and force rows only
                     for a in range(3):
                         for c in range(m):
                             dfb[a, j, c] = 0.0
+                        if not active[e, a]:
+                            continue
                         for k in range(ns):
                             fak = Fs[a, k]
                             if fak != 0.0:
-                                for c in range(m):
+                                for i in range(nc):
+                                    c = cols[i]
                                     dfb[a, j, c] += fak * ds[k, c]
                         for b in range(3):
                             fab = Fu[a, b]
-                            if fab != 0.0:
+                            if fab != 0.0 and active[e, b]:
                                 for h in range(nh):
                                     dfb[a, j, b * nh + h] += fab * E[j, h]
                     for a in range(ns):
-                        for c in range(m):
-                            ds_new[a, c] = 0.0
+                        for i in range(nc):
+                            ds_new[a, cols[i]] = 0.0
                         for k in range(ns):
                             sak = Ss[a, k]
                             if sak != 0.0:
-                                for c in range(m):
+                                for i in range(nc):
+                                    c = cols[i]
                                     ds_new[a, c] += sak * ds[k, c]
                         for b in range(3):
                             sab = Su[a, b]
-                            if sab != 0.0:
+                            if sab != 0.0 and active[e, b]:
                                 for h in range(nh):
                                     ds_new[a, b * nh + h] += sab * E[j, h]
                     for a in range(ns):
-                        for c in range(m):
+                        for i in range(nc):
+                            c = cols[i]
                             ds[a, c] = ds_new[a, c]
                 for k in range(ns):
                     s[k] = s_new[k]
@@ -150,7 +166,20 @@ def _march_py(
         F[e] = np.dot(P, f[e]).T
         if want_jac:
             for a in range(3):
-                J[e, a] = np.dot(P, dfb[a])
+                if not active[e, a]:
+                    J[e, a] = 0.0
+                elif nc == m:
+                    J[e, a] = np.dot(P, dfb[a])
+                else:  # the active columns only (the others are zero)
+                    J[e, a] = 0.0
+                    sub = np.empty((nt, nc))
+                    for j in range(nt):
+                        for i in range(nc):
+                            sub[j, i] = dfb[a, j, cols[i]]
+                    Ja = np.dot(P, sub)
+                    for h in range(nh):
+                        for i in range(nc):
+                            J[e, a, h, cols[i]] = Ja[h, i]
 
 
 def march(
@@ -166,6 +195,7 @@ def march(
     want_jac: bool = True,
     tol: float = TOL,
     max_periods: int = MAX_PERIODS,
+    active: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """March ``law`` over periods of samples ``u`` (n_el, nt, 3) in metres until it repeats.
 
@@ -174,7 +204,10 @@ def march(
 
     * ``f`` (n_el, nt, 3): force samples ``[T1, T2, -N]`` (N) of the last period;
     * ``F`` (n_el, 3, nh): their harmonics ``P @ f``;
-    * ``J`` (n_el, 3, nh, 3, nh): ``dF[e, a, h] / dU[e, b, c]`` (N/m), or None;
+    * ``J`` (n_el, 3, nh, 3, nh): ``dF[e, a, h] / dU[e, b, c]`` (N/m), or None; only on the
+      ``active`` (n_el, 3) directions (default all): zero where the force direction ``a`` or the
+      displacement direction ``b`` is inactive (a zero row of ``W``: never moves, acts on
+      nothing);
     * ``n_slip``, ``n_sep`` (n_el,): samples slipping / separated in that period;
     * ``contact`` (n_el, nt): the contact is closed (N > 0) at each sample;
     * ``periods`` (n_el,): periods marched; ``converged`` (n_el,): the state repeated
@@ -193,10 +226,15 @@ def march(
     periods = np.zeros(n_el, dtype=np.int64)
     converged = np.zeros(n_el, dtype=np.bool_)
     arrs = [np.ascontiguousarray(a, dtype=float) for a in (mu, kt1, kt2, kn, n0)]
+    act = (
+        np.ones((n_el, 3), dtype=np.bool_)
+        if active is None
+        else np.ascontiguousarray(active, dtype=np.bool_)
+    )
     specialise(_march_py, lw, "_march")(
         lw.n_state, u,
         np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(P, dtype=float),
-        *arrs, bool(want_jac), float(tol), int(max_periods),
+        *arrs, act, bool(want_jac), float(tol), int(max_periods),
         f, F, J, n_slip, n_sep, contact, periods, converged,
     )  # fmt: skip
     capped = int(np.sum(~converged))

@@ -64,6 +64,7 @@ def aft(
         elements.n0,
         elements.law,
         want_jac,
+        elements.active,
     )
     F = np.ascontiguousarray(out["F"].transpose(2, 0, 1))
     return AftResult(

@@ -172,6 +172,8 @@ class HarmonicBalance:
             self.W = self.el.W
             self.act = np.flatnonzero(self.el.active.ravel())
             self.kc = self.el.kc
+            ac = self.el.active
+            self._active_pairs = (ac[:, :, None] & ac[:, None, :])[:, :, None, :, None]
         else:
             self.W = sp.csr_matrix((0, self.n))
             self.act = np.zeros(0, dtype=int)
@@ -264,6 +266,8 @@ class HarmonicBalance:
         h = np.arange(f.nh)
         for a in range(3):
             D[:, a, h, a, h] -= self.kc[:, a][:, None]
+        # an inactive direction (zero row of W) never moves and acts on nothing: no entries
+        D *= self._active_pairs
         if f.has_dc and self.anchor.any():
             G[0] += self.anchor * Uloc[0]
             for a in range(2):

@@ -34,6 +34,7 @@ from .corrector import Constraint, Corrector
 from .fourier import Fourier, default_nt
 from .options import SolverOptions
 from .peak import insert_peaks, refine_peaks
+from .small import make_corrector
 from .stability import STABLE, UNKNOWN
 from .stability_path import HOW_NONE, StabilityPath
 from .system import System
@@ -135,7 +136,7 @@ def frequency_response(
         slip = el.mu * el.n0 / np.maximum(np.maximum(el.kt1, el.kt2), 1e-300)
         u_ref = max(u_ref, float(slip.max()) * 1e-3)
     u_ref = u_ref if u_ref > 0 else 1e-9
-    corr = Corrector(hb, opts, u_ref, w0)
+    corr = make_corrector(hb, opts, u_ref, w0)
     band_s = (w1 - w0) / w0
     rec = _Recorder()
     timings = dict(setup=time.perf_counter() - t_start, stability=0.0, post=0.0)

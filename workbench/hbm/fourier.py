@@ -171,8 +171,8 @@ class Fourier:
         harmonic content.
         """
         X = np.atleast_2d(np.asarray(X, dtype=float).T).T
-        tau = 2 * np.pi * np.arange(n_fine) / n_fine
-        x = self.synth(X, tau)
+        tau, B0 = self._fine(n_fine)
+        x = B0 @ X
         j = np.argmax(np.abs(x), axis=0)
         t = tau[j].copy()
         kk = self.k.astype(float)
@@ -190,6 +190,14 @@ class Fourier:
         B = np.where(self.kind == 0, 1.0, np.where(self.kind == 1, np.cos(ph), np.sin(ph)))
         refined = np.abs(np.einsum("mh,hm->m", B, X))
         return np.maximum(refined, np.abs(x[j, np.arange(x.shape[1])]))
+
+    def _fine(self, n_fine: int) -> tuple[np.ndarray, np.ndarray]:
+        """The phases of ``n_fine`` samples and their synthesis matrix (cached per object)."""
+        cache = self.__dict__.setdefault("_fine_cache", {})
+        if n_fine not in cache:
+            tau = 2 * np.pi * np.arange(n_fine) / n_fine
+            cache[n_fine] = (tau, self.synth(np.eye(self.nh), tau))
+        return cache[n_fine]
 
     def rms(self, X: np.ndarray) -> np.ndarray:
         """RMS over the period of each signal in X (nh, m).

@@ -71,6 +71,12 @@ class SolverOptions:
     )
     single_above: int = param(2000, "auto: unknowns above which the LU is single precision", lo=0)
     reduce_factor: bool = param(True, "factor only the columns of elements that are not stuck")
+    compiled: str = param(
+        "auto",
+        "auto: the compiled corrector for small systems with modal damping (the same steps "
+        "as PETSc's, one compiled call per solve); off: always PETSc SNES",
+        choices=("auto", "off"),
+    )
     auto_newton_limit: int = param(
         200, "auto: unknowns up to which every iteration refactors", lo=0
     )

@@ -25,30 +25,71 @@ adding one module here (see ``dahl.py``).
 
 from __future__ import annotations
 
+import ast
 import importlib
-import pkgutil
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 from types import ModuleType
+
+# A sample counts as slipping (for the status only; the force is limited
+# either way) when the trial force exceeds the slip limit by more than this
+# fraction of it. In the converged period an element that slipped only while
+# the march started (elastic shakedown) touches its limit again to round-off,
+# ~1e-15 relative, without slipping: it is stuck.
+SLIP_TOL = 1e-9
 
 
 @dataclass(frozen=True)
 class Law:
-    """A registered contact law (see the package docstring)."""
+    """A registered contact law (see the package docstring).
+
+    Its name, state size and summary are read from the module's source; the
+    module itself (and numba with it) is imported when ``step`` or ``module``
+    is first used, so a run whose kernels are compiled ahead of time never
+    imports numba.
+    """
 
     name: str
     n_state: int
-    step: object  # numba dispatcher
     summary: str
-    module: ModuleType
+    module_name: str
+    _mod: list = field(default_factory=list, repr=False, compare=False)
+
+    @property
+    def module(self) -> ModuleType:
+        if not self._mod:
+            self._mod.append(importlib.import_module(f"{__name__}.{self.module_name}"))
+        return self._mod[0]
+
+    @property
+    def step(self) -> object:
+        """The numba dispatcher of one time sample (see the package docstring)."""
+        return self.module.step
+
+
+def _constants(path: Path) -> tuple[dict[str, object], str]:
+    """The module-level constants (NAME, N_STATE) and the docstring of a law's source."""
+    tree = ast.parse(path.read_text())
+    out: dict[str, object] = {}
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and len(node.targets) == 1:
+            t = node.targets[0]
+            if isinstance(t, ast.Name) and t.id in ("NAME", "N_STATE"):
+                out[t.id] = ast.literal_eval(node.value)
+    return out, ast.get_docstring(tree) or ""
 
 
 def _discover() -> dict[str, Law]:
     found: dict[str, Law] = {}
-    mods = sorted(m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_"))
-    for name in mods:
-        mod = importlib.import_module(f"{__name__}.{name}")
-        doc = (mod.__doc__ or "").strip().splitlines()
-        law = Law(mod.NAME, int(mod.N_STATE), mod.step, doc[0] if doc else "", mod)
+    here = Path(__file__).parent
+    for path in sorted(here.glob("*.py")):
+        if path.name.startswith("_"):
+            continue
+        const, doc = _constants(path)
+        if "NAME" not in const or "N_STATE" not in const:
+            raise ImportError(f"contact law module {path.name} must define NAME and N_STATE")
+        lines = doc.strip().splitlines()
+        law = Law(str(const["NAME"]), int(const["N_STATE"]), lines[0] if lines else "", path.stem)
         found[law.name] = law
     return found
 

@@ -4,12 +4,7 @@ from __future__ import annotations
 
 from numba import njit
 
-# A sample counts as slipping (for the status only; the force is limited
-# either way) when the trial force exceeds the slip limit by more than this
-# fraction of it. In the converged period an element that slipped only while
-# the march started (elastic shakedown) touches its limit again to round-off,
-# ~1e-15 relative, without slipping: it is stuck.
-SLIP_TOL = 1e-9
+from . import SLIP_TOL  # noqa: F401 - the laws take it from here
 
 
 @njit(cache=True)
