@@ -65,4 +65,9 @@ print(f"setup: dolfinx {dolfinx.__version__}, numpy {numpy.__version__}, "
 PY
     echo "$want" >"$stamp"
 fi
+# the compiled small-system corrector, built ahead of time so that small runs (upd frf) load
+# it without numba; a no-op when it is up to date (a digest of its sources), about 3 min when not
+if ! "$venv/bin/python" -m workbench.hbm.small_aot; then
+    echo "setup: the ahead-of-time kernels were not built; numba compiles them at first use" >&2
+fi
 echo "setup: ready ($venv)" >&2

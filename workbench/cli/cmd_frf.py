@@ -18,7 +18,8 @@ method with pseudo-arc-length continuation and Hill stability, one curve per
 excitation level of the model file.
 
 For each level it writes curve_<i>.h5 (the branch), curve_<i>.csv and
-curve_<i>.png (status map), plus frf.png (all levels) and summary.json to --out,
+curve_<i>.png (status map), plus frf.png (all levels) and summary.json to --out
+(--no-figures: no PNG),
 and prints per level: peak_frequency_hz and peak_amplitude (largest |y(t)| over
 the period of the first output DOF, in the model's length unit),
 h1_peak_frequency_hz and h1_amplitude (the harmonic-1 amplitude at its own
@@ -43,6 +44,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--harmonics", metavar="H0,H1,...", help="harmonic list instead of [hbm]")
     p.add_argument("--nt", metavar="N", help="time samples per period instead of [hbm] nt")
     p.add_argument("--no-stability", action="store_true", help="skip Hill's method")
+    p.add_argument(
+        "--no-figures",
+        action="store_true",
+        help="write no PNG figures (the curves, CSV and summary only: a lean batch run)",
+    )
 
 
 def _list(text: str | None, name: str, cast) -> list | None:
@@ -63,7 +69,6 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..errors import InputError, SolveError
     from ..hbm import frequency_response, load_frf_model
     from ..io import write_json
-    from ..render.curves import plot_frf, plot_status_map
 
     over: dict[str, dict[str, Any]] = {}
     lv = _list(args.levels, "--levels", float)
@@ -111,7 +116,9 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
             "h5": str(b.save(out / f"{stem}.h5")),
             "csv": str(b.to_csv(out / f"{stem}.csv", unit=model.length_unit)),
         }
-        if b.n_points and b.status.shape[1]:
+        if b.n_points and b.status.shape[1] and not args.no_figures:
+            from ..render.curves import plot_status_map
+
             files["png"] = str(
                 plot_status_map(
                     b, out / f"{stem}.png", title=f"{model.name}: contact status, level {level:g}"
@@ -130,14 +137,18 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         rows.append(row)
         if b.failed:
             failures.append(f"level {level:g}: {b.message}")
-    fig = plot_frf(
-        branches,
-        out / "frf.png",
-        unit_scale=1e3 if mm else 1.0,
-        unit="mm" if mm else model.length_unit,
-        title=f"{model.name}",
-        force_per_level_n=float(abs(model.f1).max()),
-    )
+    fig = None
+    if not args.no_figures:
+        from ..render.curves import plot_frf
+
+        fig = plot_frf(
+            branches,
+            out / "frf.png",
+            unit_scale=1e3 if mm else 1.0,
+            unit="mm" if mm else model.length_unit,
+            title=f"{model.name}",
+            force_per_level_n=float(abs(model.f1).max()),
+        )
     summary = {
         "model": str(model.path),
         "name": model.name,
@@ -147,7 +158,7 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         "band_hz": list(model.band_hz),
         "harmonics": list(model.harmonics),
         "nt": int(branches[0].nt) if branches else None,
-        "figure": str(fig),
+        "figure": str(fig) if fig else None,
         "out": str(out),
         "curves": rows,
     }

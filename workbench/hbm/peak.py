@@ -13,7 +13,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brent, fminbound
 
 from .balance import HarmonicBalance
 from .corrector import Corrector
@@ -122,6 +121,8 @@ def _search(key: str, solve, cache: dict, branch: dict, grid, opts):
             return branch[fq]
         pd = solve(fq)
         return -np.inf if pd is None else float(getattr(pd, key)[0])
+
+    from scipy.optimize import brent, fminbound
 
     known = np.array(sorted({*branch, *map(float, grid)}))
     kval = np.array([value(q) for q in known])

@@ -53,6 +53,7 @@ _FUNCS = (
     "_func",
     "solve",
     "solve_flat",
+    "evaluate_flat",
 )
 _jit: dict[str, object] = {}
 
@@ -69,13 +70,13 @@ def eligible(hb: HarmonicBalance, opts: SolverOptions) -> bool:
     return mode == "newton"
 
 
-def kernels(law: str):
-    """The compiled ``solve`` for contact law ``law`` (ahead-of-time module, else numba JIT)."""
+def kernels(law: str) -> tuple[object, object]:
+    """The compiled ``(solve, evaluate)`` for contact law ``law`` (ahead of time, else JIT)."""
     from . import small_aot
 
-    fn = small_aot.load(law)
-    if fn is not None:
-        return fn
+    pair = (small_aot.load(law, "solve"), small_aot.load(law, "evaluate"))
+    if pair[0] is not None and pair[1] is not None:
+        return pair
     if law not in _jit:
         from numba import njit
 
@@ -90,7 +91,7 @@ def kernels(law: str):
             copy = types.FunctionType(f.__code__, g, f"{name}_{law}", f.__defaults__)
             copy.__qualname__ = f"{name}_{law}"
             g[name] = njit(cache=True)(copy)
-        _jit[law] = g["solve_flat"]
+        _jit[law] = (g["solve_flat"], g["evaluate_flat"])
     return _jit[law]
 
 
@@ -105,7 +106,7 @@ class SmallCorrector(Corrector):
 
         f, el = hb.fourier, hb.el
         self.law = el.law
-        self._solve = kernels(el.law)
+        self._solve, self._evaluate = kernels(el.law)
         nz, n3, n_s, nh, nt = hb.lin.n_z, hb.n3, hb.n_s, f.nh, f.nt
         Sz = hb.Sz.toarray() if hasattr(hb.Sz, "toarray") else np.asarray(hb.Sz)
         Bz = hb.Bz.toarray() if hasattr(hb.Bz, "toarray") else np.asarray(hb.Bz)
@@ -190,15 +191,40 @@ class SmallCorrector(Corrector):
         self._keep_evaluation(y, kind)
         return y, ok, its, 0, name
 
+    def evaluation(self, xs: np.ndarray, ws: float) -> Evaluation:
+        """The evaluation at scaled (xs, ws): the last one if it is there, else a compiled one."""
+        x, w = np.asarray(xs, dtype=float) * self.u_ref, float(ws) * self.w_ref
+        ev = self._last(x, w)
+        return ev if ev is not None else self._compiled_evaluation(x, w)
+
+    def evaluated(self, x: np.ndarray, omega: float) -> Evaluation:
+        """The evaluation at unknowns x (m) and omega (rad/s): the last one if it is there
+        (within 4 ulp of omega), else one by the compiled kernel (no numba needed)."""
+        ev = self._last(x, omega, ulps=4)
+        return ev if ev is not None else self._compiled_evaluation(x, omega)
+
+    def _compiled_evaluation(self, x: np.ndarray, w: float) -> Evaluation:
+        hb = self.hb
+        self._evaluate(
+            np.ascontiguousarray(x, dtype=float), float(w), *self._data,
+            np.ascontiguousarray(hb.Pz, dtype=float), *self._maps, *self._el, *self._march,
+            *self._ws,
+        )  # fmt: skip
+        hb.stats["n_residual"] += 1
+        return self._keep(np.array(x, dtype=float), float(w))
+
     def _keep_evaluation(self, y: np.ndarray, kind: str) -> None:
         """The kernel's last evaluation (at ``y``) as an :class:`Evaluation` (no new AFT)."""
+        ws = float(y[-1]) if kind == "arclength" else self.w_fixed
+        self._keep(y[: self.N] * self.u_ref, ws * self.w_ref)
+
+    def _keep(self, x: np.ndarray, w: float) -> Evaluation:
+        """The workspace's evaluation at (x, w) as an :class:`Evaluation` (copied out)."""
         from .aft import AftResult
 
         hb = self.hb
         f = hb.fourier
         U, G, D, ut, fs, F, J, n_slip, n_sep, contact, periods, _, Yz, r, _ = self._ws
-        ws = float(y[-1]) if kind == "arclength" else self.w_fixed
-        x = y[: self.N] * self.u_ref
         hb.stats["aft_periods_max"] = max(hb.stats["aft_periods_max"], int(periods.max(initial=0)))
         aft = AftResult(
             F=np.ascontiguousarray(F.transpose(2, 0, 1)),
@@ -210,9 +236,8 @@ class SmallCorrector(Corrector):
             contact=contact.copy(),
             periods=periods.copy(),
         )
-        self.ev = Evaluation(
-            x, ws * self.w_ref, hb.level, U.copy(), G.copy(), D.copy(), aft, Yz.copy(), r.copy()
-        )
+        self.ev = Evaluation(x, w, hb.level, U.copy(), G.copy(), D.copy(), aft, Yz.copy(), r.copy())
+        return self.ev
 
     def destroy(self) -> None:
         """Nothing to free (no PETSc objects)."""

@@ -46,8 +46,9 @@ def digest() -> int:
     return int.from_bytes(h.digest()[:8], "little") >> 2
 
 
-def load(law: str):
-    """The ahead-of-time compiled solver for ``law``, or None (not built, or out of date)."""
+def load(law: str, what: str = "solve"):
+    """The ahead-of-time compiled ``solve`` (or ``evaluate``) for ``law``, or None (not built,
+    or out of date)."""
     if "mod" not in _loaded:
         mod = None
         try:
@@ -58,7 +59,7 @@ def load(law: str):
             mod = None
         _loaded["mod"] = mod
     mod = _loaded["mod"]
-    return getattr(mod, f"solve_{law}", None) if mod is not None else None
+    return getattr(mod, f"{what}_{law}", None) if mod is not None else None
 
 
 def build(force: bool = False) -> Path | None:
@@ -91,6 +92,8 @@ def build(force: bool = False) -> Path | None:
             g[name] = njit(types.FunctionType(f.__code__, g, f"{name}_aot_{law_name}"))
         entry = types.FunctionType(K.solve_flat.__code__, g, f"solve_{law_name}")
         cc.export(f"solve_{law_name}", K.SIGNATURE)(entry)
+        entry = types.FunctionType(K.evaluate_flat.__code__, g, f"evaluate_{law_name}")
+        cc.export(f"evaluate_{law_name}", K.EVAL_SIGNATURE)(entry)
     ns: dict = {}
     exec(f"def source_digest():\n    return {digest()}\n", ns)  # the digest as a constant
     cc.export("source_digest", "i8()")(ns["source_digest"])

@@ -446,7 +446,7 @@ def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, 
             reason = CONV_SNORM
             break
     y_out[:] = X
-    if not np.array_equal(at, X):  # the workspace holds the evaluation at the result
+    if own and not np.array_equal(at, X):  # the workspace holds the evaluation at a solution
         _func(X, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc,
               anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref, cx, cw, c0, mx, mw, xc, wc,
               ds)  # fmt: skip
@@ -471,7 +471,17 @@ def solve_flat(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, 
                  info)  # fmt: skip
 
 
-# the signature of solve_flat (numba types), for the ahead-of-time build
+def evaluate_flat(x, w, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc,
+                  anchor, act, has_dc, ns, mtol, mper, U, G, D, ut, f, F, J, n_slip, n_sep,
+                  contact, periods, conv, Yz, r, T):  # fmt: skip
+    """:func:`residual` at unknowns ``x`` (m) and ``w`` (rad/s) into the separate workspace."""
+    ws = (U, G, D, ut, f, F, J, n_slip, n_sep, contact, periods, conv, Yz, r, T)
+    residual(x, w, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc, anchor,
+             act, has_dc, ns, mtol, mper, ws)  # fmt: skip
+    return 0
+
+
+# the signatures of solve_flat and evaluate_flat (numba types), for the ahead-of-time build
 SIGNATURE = (
     "i8(f8[::1], i8, f8, f8[::1], i8[::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], "
     "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1], "
@@ -480,4 +490,11 @@ SIGNATURE = (
     "i8[::1], i8[::1], b1[:, ::1], i8[::1], b1[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8, f8, "
     "f8[::1], f8, f8, f8[::1], f8, f8[::1], f8, f8, f8, f8, i8, i8, i8, f8[::1], f8[::1], "
     "i8[::1])"
+)
+EVAL_SIGNATURE = (
+    "i8(f8[::1], f8, f8[::1], i8[::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], "
+    "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1], "
+    "f8[::1], f8[:, ::1], f8[:, ::1], b1[:, ::1], b1, i8, f8, i8, f8[:, ::1], f8[:, ::1], "
+    "f8[:, :, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], "
+    "i8[::1], i8[::1], b1[:, ::1], i8[::1], b1[::1], f8[:, ::1], f8[::1], f8[:, ::1])"
 )

@@ -245,14 +245,16 @@ class StabilityPath:
         """Hill's method at row ``i`` when its verdict is pending (its evaluation recomputed)."""
         if rows["stability"][i] != PENDING:
             return
-        x = np.asarray(rows["x"][i], dtype=float)
-        w = TWO_PI * float(rows["freq_hz"][i])
-        ev = self.corr.evaluated(x, w)
-        st = self.check(ev)
+        st = self.check(self._row_evaluation(rows, i))
         rows["stability"][i] = st.verdict
         rows["stable"][i] = st.stable
         rows["max_floquet_real"][i] = st.max_real
         rows["stability_how"][i] = HOW_HILL
+
+    def _row_evaluation(self, rows: dict[str, list], i: int):
+        """The evaluation at row ``i`` of the branch (recomputed from its unknowns)."""
+        x = np.asarray(rows["x"][i], dtype=float)
+        return self.corr.evaluated(x, TWO_PI * float(rows["freq_hz"][i]))
 
     def summary(self) -> dict[str, float | int]:
         """Counts of each kind of verdict and the time spent in Hill's method (s)."""
