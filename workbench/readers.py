@@ -313,7 +313,10 @@ def read_matrix_market(path: str | Path, param: str = "model.matrices") -> Any:
         keys = coo.row.astype(np.int64) * max(coo.shape[1], 1) + coo.col
         if np.unique(keys).size != keys.size:
             raise InputError(
-                param, str(path), "each entry once", "an entry is given twice (or both triangles)"
+                param,
+                str(path),
+                "each entry once",
+                "an entry is given twice, or a symmetric file gives both triangles",
             )
     return _as_matrix(m, param)
 

@@ -69,7 +69,10 @@ class Context:
         shown = utf8_name(str(p.absolute()))
         if shown is not None:
             raise InputError(
-                what, shown, "a folder whose path is UTF-8", "rename it (or the current folder)"
+                what,
+                _Shown(shown),
+                "a folder whose path is UTF-8",
+                "rename the folder, or work from a folder whose name is UTF-8",
             )
         if p.exists() and not p.is_dir():
             raise InputError(what, str(p), "a folder", "it is an existing file")
@@ -170,12 +173,16 @@ def _common(suppress: bool) -> argparse.ArgumentParser:
 
 def add_geometry_options(parser: argparse.ArgumentParser, contact_help: str | None = None) -> None:
     """--size and --geometry (and --contact-file with its help, if given) of the FE commands."""
+    from ..geometry.params import MAX_SIZE_MM
+
     parser.add_argument(
         "--size",
         type=num,
         metavar="MM",
         default=None,
-        help="global element size of the rig, mm (default: [rig.mesh] size_mm)",
+        help="global element size of the rig, mm (default: [rig.mesh] size_mm); "
+        f"0 < MM <= {MAX_SIZE_MM:g}, and coarse enough for at most a few million "
+        "tetrahedra",
     )
     parser.add_argument(
         "--geometry",
@@ -371,8 +378,18 @@ def check_names(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
                 if shown is not None:
                     name = a.option_strings[-1] if a.option_strings else (a.metavar or a.dest)
                     raise InputError(
-                        name, shown, "a UTF-8 name", "it has bytes that are not UTF-8; rename it"
+                        name,
+                        _Shown(shown),
+                        "a UTF-8 name",
+                        "it has bytes that are not UTF-8; rename it",
                     )
+
+
+class _Shown(str):
+    """A name shown in an error as it is (its escapes written once, not doubled)."""
+
+    def __repr__(self) -> str:
+        return f"'{self}'"
 
 
 def num(text: str) -> float | str:

@@ -422,6 +422,13 @@ def _sections(data: dict[str, Any], complete: bool = True) -> tuple[dict, list]:
         if isinstance(k, float):  # 1.0 in a list of harmonics is a typo, not a harmonic
             raise InputError(f"hbm.harmonics[{i}]", k, "a whole number (no decimal point)")
         check_int(f"hbm.harmonics[{i}]", k, 0, MAX_HARMONIC)
+    if h.nt and h.harmonics and h.nt <= 2 * max(h.harmonics):
+        raise InputError(
+            "hbm.nt",
+            h.nt,
+            f"hbm.nt > 2 x the highest harmonic = {2 * max(h.harmonics)}",
+            "the sampling theorem; 0 picks one",
+        )
     return sec, contact
 
 
