@@ -287,7 +287,7 @@ def read_matrix_market(path: str | Path, param: str = "model.matrices") -> Any:
 
     path = Path(path)
     with path.open("rb") as fh:
-        head = fh.readline(200).decode("ascii", "replace").split()
+        head = fh.readline(200).decode("ascii", "backslashreplace").split()
     words = [w.lower() for w in head]
     if len(words) != 5 or words[0] != "%%matrixmarket" or words[1] != "matrix":
         raise InputError(param, str(path), _MM_ALLOWED, f"its first line is {' '.join(head)!r}")

@@ -81,6 +81,13 @@ def check_manifest(path: Path) -> dict:
             "a JSON object written by upd study",
             f"it holds a {type(m).__name__}",
         )
+    for key, typ in shapes.items():
+        if key in m and not isinstance(m[key], typ):
+            raise InputError(
+                f"manifest {key}",
+                m[key] if len(str(m[key])) < 40 else "...",
+                f"a JSON {'array' if typ is list else 'object'} (in {path})",
+            )
     missing = [k for k in REQUIRED if k not in m]
     if missing:
         raise InputError(
@@ -91,13 +98,6 @@ def check_manifest(path: Path) -> dict:
         )
     if not isinstance(m["title"], str):
         raise InputError("manifest title", m["title"], f"a JSON string (in {path})")
-    for key, typ in shapes.items():
-        if key in m and not isinstance(m[key], typ):
-            raise InputError(
-                f"manifest {key}",
-                m[key] if len(str(m[key])) < 40 else "...",
-                f"a JSON {'array' if typ is list else 'object'} (in {path})",
-            )
     for i, sec in enumerate(m.get("sections", [])):
         if not isinstance(sec, dict):
             raise InputError(f"manifest sections[{i}]", sec, f"a JSON object (in {path})")

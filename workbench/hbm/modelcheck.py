@@ -239,28 +239,27 @@ def check_stiffness(M: Any, K: Any, contacts: Any, groups: list) -> None:
         for key, k in (("kt_n_per_m", p.kt1), ("kt2_n_per_m", p.kt2), ("kn_n_per_m", p.kn))
     ]
     stiff = max(springs, key=lambda t: t[1], default=None)
-    spread = f"{top / low:.2g}" if low > 0 else "beyond any ratio"
+    if low <= 100 * np.finfo(float).eps * top:
+        raise InputError(
+            "model.stiffness",
+            f"lowest eigenvalue {low:.3g} of the stuck system (K + contact springs, M)",
+            "a model held by supports or contact elements (no free rigid-body mode)",
+            "a rigid-body mode is held by no support and no contact element; add contact "
+            "elements or supports",
+        )
     if stiff is not None and stiff[1] > 1e3 * kmax:
         raise InputError(
             stiff[0],
             stiff[1],
             f"a contact stiffness nearer the model's own (largest diagonal of K {kmax:.3g})",
-            f"with it the eigenvalues of the stuck system span {spread}; the solver needs "
-            f"less than {1 / SINGULAR_RATIO:.0e}",
-        )
-    if low > 100 * np.finfo(float).eps * top:
-        raise InputError(
-            "model.stiffness",
-            f"eigenvalues of the stuck system from {low:.3g} to {top:.3g}",
-            f"a spread below {1 / SINGULAR_RATIO:.0e} (a well-conditioned model)",
-            "check the units of model.stiffness and model.mass",
+            f"with it the eigenvalues of the stuck system span {top / low:.2g}; the solver "
+            f"needs less than {1 / SINGULAR_RATIO:.0e}",
         )
     raise InputError(
         "model.stiffness",
-        f"lowest eigenvalue {low:.3g} of the stuck system (K + contact springs, M)",
-        "a model held by supports or contact elements (no free rigid-body mode)",
-        "a rigid-body mode is held by no support and no contact element; add contact "
-        "elements or supports",
+        f"eigenvalues of the stuck system from {low:.3g} to {top:.3g}",
+        f"a spread below {1 / SINGULAR_RATIO:.0e} (a well-conditioned model)",
+        "check the units of model.stiffness and model.mass",
     )
 
 
