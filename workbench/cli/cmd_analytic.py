@@ -67,7 +67,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_value(
         g,
         "--points",
-        Value("int", 3, 10_000),
+        Value("int", 3, 10_000, name="points"),
         "contact points per line for the 3-D slip table (23 as the paper)",
         metavar="N",
         default=23,
@@ -75,7 +75,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_value(
         g,
         "--step",
-        Value("float", 0.01, 5.0, unit="deg"),
+        Value("float", 0.01, 5.0, unit="deg", name="step"),
         "cone-angle step of the sweeps",
         metavar="DEG",
         default=0.25,

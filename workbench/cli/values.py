@@ -26,7 +26,9 @@ class Value:
     ``kind``: "int", "float", "ints" or "floats" (comma-separated);
     ``count``: a list of exactly this many values; ``rising``: each value
     above the one before; ``ratio``: the largest at most this times the
-    smallest; ``why``: the reason for the range, said when it is refused.
+    smallest; ``why``: the reason for the range, said when it is refused;
+    ``name``: the parameter the messages name, where the library names it
+    so too (``points`` of ``upd analytic``); the flag by default.
     """
 
     kind: str
@@ -38,6 +40,7 @@ class Value:
     rising: bool = False
     ratio: float | None = None
     why: str = ""
+    name: str = ""  # how the messages name it (default: the flag)
 
     def describe(self, metavar: str = "X") -> str:
         """The range in words, for the help: 'a whole number 1 <= N <= 200'."""
@@ -91,6 +94,12 @@ class Value:
     def _one(self, name: str, text: Any) -> Any:
         whole = self.kind in ("int", "ints")
         lo, hi = self.lo, self.hi
+        try:  # a number is shown as a number ("n = 0"), anything else as typed
+            f = float(text)
+            if f == f and abs(f) != float("inf"):
+                text = int(f) if whole and f == int(f) else f
+        except (TypeError, ValueError):
+            pass
         try:
             if whole:
                 return check_int(
@@ -136,4 +145,5 @@ def check_values(parser: argparse.ArgumentParser, args: argparse.Namespace) -> N
         raw = getattr(args, a.dest, None)
         if raw is None:
             continue
-        setattr(args, a.dest, a.value.check(a.option_strings[-1], raw))  # type: ignore[attr-defined]
+        v = a.value  # type: ignore[attr-defined]
+        setattr(args, a.dest, v.check(v.name or a.option_strings[-1], raw))
