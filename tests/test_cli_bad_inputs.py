@@ -10,7 +10,11 @@ of imports each), in a fresh folder holding the row's files, and checks:
   the row's ``needle`` (the parameter, option or file that is wrong), and no
   traceback and no "internal error";
 - a rejected run leaves no output folder behind (``--out`` naming a folder
-  that did not exist before).
+  that did not exist before);
+- no work starts before the error: meshing (``gmsh.initialize``) and the
+  harmonic balance (``Fourier``) are booby-trapped, so a row whose input is
+  refused only after them fails (a bad input costs no work, and never a
+  minute of meshing).
 """
 
 from __future__ import annotations
@@ -36,7 +40,9 @@ ERROR_LINE = re.compile(r"^upd( \w+)?: error: ")
 
 
 def _fill(text: str, d: Path) -> str:
-    return text.replace("{d}", str(d)).replace("{root}", str(ROOT))
+    """``{d}`` the row's folder, ``{root}`` the repository, ``{ff}`` the byte 0xff (a file
+    name that is not UTF-8, as Python keeps it: a surrogate)."""
+    return text.replace("{d}", str(d)).replace("{root}", str(ROOT)).replace("{ff}", "\udcff")
 
 
 def make_file(d: Path, name: str, spec: str) -> None:
@@ -46,13 +52,19 @@ def make_file(d: Path, name: str, spec: str) -> None:
     ``@npz JSON``             a .npz of the arrays ``{"M": [[...]], ...}``;
     ``@h5 JSON``              an HDF5 file of those arrays;
     ``@h5cut JSON``           the same HDF5 file cut to half its length (truncated);
+    ``@npzpy EXPR``           a .npz of the arrays of a Python expression (``np`` is numpy):
+                              any dtype, CSR parts, complex values;
     ``@example NAME | OLD | NEW``
                               studies/examples/NAME with OLD replaced by NEW (its matrix
                               file is copied beside it).
     """
-    p = d / name
+    p = d / _fill(name, d)
     p.parent.mkdir(parents=True, exist_ok=True)
-    if spec.startswith("@hex "):
+    if spec.startswith("@npzpy "):
+        arrays = eval(spec[7:], {"np": np})  # noqa: S307 - the test table's own data
+        with p.open("wb") as fh:
+            np.savez(fh, **arrays)
+    elif spec.startswith("@hex "):
         p.write_bytes(bytes.fromhex(spec[5:].replace(" ", "")))
     elif spec.startswith(("@npz ", "@h5 ", "@h5cut ")):
         kind, _, data = spec.partition(" ")
@@ -123,8 +135,22 @@ def test_the_table_is_large_and_every_row_is_distinct():
     assert not dup, dup
 
 
+def _no_work(monkeypatch) -> None:
+    """Meshing and the harmonic balance raise if they start: a refused input costs none."""
+    import gmsh
+
+    from workbench.hbm import fourier
+
+    def boom(*_a, **_k):
+        raise AssertionError("work started before the input was refused")
+
+    monkeypatch.setattr(gmsh, "initialize", boom)
+    monkeypatch.setattr(fourier.Fourier, "__post_init__", boom)
+
+
 @pytest.mark.parametrize("row", ROWS, ids=[f"{i}:{r['argv'][:60]}" for i, r in enumerate(ROWS)])
-def test_bad_input_is_one_line_naming_the_parameter(row, tmp_path):
+def test_bad_input_is_one_line_naming_the_parameter(row, tmp_path, monkeypatch):
+    _no_work(monkeypatch)
     d = tmp_path
     for name, spec in row.get("files", {}).items():
         make_file(d, name, spec)

@@ -38,9 +38,11 @@ def param(
     lo_open: bool = False,
     hi_open: bool = False,
     choices: tuple[str, ...] | None = None,
+    why: str = "",
 ) -> Any:
-    """Declare a record field with its help text and allowed range."""
-    meta = dict(help=help, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, choices=choices)
+    """Declare a record field with its help text and allowed range (``why``: the range's
+    reason, said when a value is refused)."""
+    meta = dict(help=help, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, choices=choices, why=why)
     if isinstance(default, (list, dict)):
         return dataclasses.field(default_factory=lambda: type(default)(default), metadata=meta)
     return dataclasses.field(default=default, metadata=meta)
@@ -85,18 +87,23 @@ def check_field(f: dataclasses.Field, value: Any, where: str = "", typ: Any = No
             "a number" if typ in (float, "float") else "a whole number",
             "a string; write it without quotes",
         )
-    if typ in (int, "int"):
-        return check_int(name, value, m.get("lo"), m.get("hi"))
-    if typ in (float, "float"):
-        return check_range(
-            name,
-            value,
-            m.get("lo"),
-            m.get("hi"),
-            lo_open=m.get("lo_open", False),
-            hi_open=m.get("hi_open", False),
-            unit=_unit_of(f.name),
-        )
+    try:
+        if typ in (int, "int"):
+            return check_int(name, value, m.get("lo"), m.get("hi"))
+        if typ in (float, "float"):
+            return check_range(
+                name,
+                value,
+                m.get("lo"),
+                m.get("hi"),
+                lo_open=m.get("lo_open", False),
+                hi_open=m.get("hi_open", False),
+                unit=_unit_of(f.name),
+            )
+    except InputError as e:
+        if m.get("why") and not e.why:
+            raise InputError(e.param, e.value, e.allowed, m["why"]) from None
+        raise
     if typ in (bool, "bool"):
         if not isinstance(value, bool):
             raise InputError(name, value, "true or false")

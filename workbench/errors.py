@@ -112,17 +112,27 @@ def check_range(
 
 
 def check_int(param: str, value: object, lo: int | None = None, hi: int | None = None) -> int:
-    """Return ``int(value)`` if it is a whole number within [lo, hi], else raise InputError."""
+    """Return ``int(value)`` if it is a whole number within [lo, hi], else raise InputError.
+
+    The one rule for every whole-number input (command line, study and model
+    files): ``12``, ``12.0``, ``"12"`` and ``"1e3"`` are whole numbers; ``1.5``,
+    NaN, infinity, text and booleans are refused with the same one-line message.
+    """
     allowed = (
         f"a whole number {'' if lo is None else f'{lo} <= '}{param}"
         f"{'' if hi is None else f' <= {hi}'}"
     )
     if isinstance(value, bool):
         raise InputError(param, value, allowed)
-    try:
-        f = float(value)  # accept 12, 12.0, "12"
-    except (TypeError, ValueError):
-        raise InputError(param, value, allowed, "not a number") from None
+    if isinstance(value, int):
+        f: float | int = value  # exact, however large (a float would round it)
+    else:
+        try:
+            f = float(value.strip() if isinstance(value, str) else value)  # 12, 12.0, "12", "1e3"
+        except (TypeError, ValueError):
+            raise InputError(param, value, allowed, "not a number") from None
+    if f != f or f in (float("inf"), float("-inf")):
+        raise InputError(param, value, allowed, "not a finite number")
     if f != int(f):
         raise InputError(param, value, allowed, "not a whole number")
     v = int(f)

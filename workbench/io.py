@@ -102,6 +102,57 @@ def code_version(
     return f"{__version__}+{tag}{digest(parts, 8)}"
 
 
+def unwritable(folder: str | Path) -> str | None:
+    """None if a file can be created, written and removed in ``folder``, else the reason.
+
+    A real write, not ``os.access``: root passes every permission check, yet
+    cannot write in /sys or /proc or on a read-only or full file system.
+    """
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".upd-probe-", dir=folder)
+    except OSError as e:
+        return e.strerror or type(e).__name__
+    try:
+        os.write(fd, b"upd\n")
+    except OSError as e:
+        return e.strerror or type(e).__name__
+    finally:
+        os.close(fd)
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+    return None
+
+
+def rescue_folder(name: str) -> Path:
+    """A new folder for results that could not be written where asked: under the system's
+    temporary folder, else the home folder (``upd-<name>-XXXX``)."""
+    import pathlib
+
+    for base in (tempfile.gettempdir(), str(pathlib.Path.home())):
+        try:
+            d = Path(tempfile.mkdtemp(prefix=f"upd-{name}-", dir=base))
+        except OSError:
+            continue
+        if unwritable(d) is None:
+            return d
+    raise OSError(f"no writable folder for the results of {name}")
+
+
+def utf8_name(text: str) -> str | None:
+    """None if ``text`` (a file name) is valid UTF-8, else its bytes shown with escapes.
+
+    Python keeps the bytes of a name that is not UTF-8 as surrogates; HDF5,
+    gmsh, JSON and HTML cannot write them.
+    """
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return os.fsencode(text).decode("utf-8", "backslashreplace")
+    return None
+
+
 LOCK_NAME = ".upd.lock"
 
 

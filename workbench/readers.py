@@ -40,7 +40,8 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import InputError, did_you_mean
+from .errors import InputError, WorkbenchError, did_you_mean
+from .matrix_checks import check_matrix
 
 Label = tuple[int, int]
 
@@ -138,7 +139,7 @@ def read_dof_map(path: str | Path) -> tuple[Label, ...]:
     """
     path = Path(path)
     out: list[Label] = []
-    for k, line in enumerate(path.read_text().splitlines(), 1):
+    for k, line in enumerate(_text(path, "model.dof_map", "a text DOF map").splitlines(), 1):
         parts = line.replace(",", " ").split()
         if not parts or not parts[0].lstrip("-").isdigit():
             continue
@@ -161,32 +162,32 @@ def read_dof_map(path: str | Path) -> tuple[Label, ...]:
 # -- single formats -----------------------------------------------------------------------
 
 
-def read_op4(path: str | Path, names: list[str] | None = None) -> dict[str, Any]:
+def read_op4(
+    path: str | Path, names: list[str] | None = None, param: str = "model.matrices"
+) -> dict[str, Any]:
     """Matrices of a Nastran OUTPUT4 file (text or binary) by name (pyNastran)."""
     from pyNastran.op4.op4 import read_op4 as _read
 
     try:
         mats = _read(str(path), matrix_names=names, debug=False, log=_quiet_log())
     except Exception as e:  # pyNastran raises bare exceptions on malformed files
-        raise InputError(
-            "model.matrices", str(path), "a readable Nastran OP4 file", str(e)
-        ) from None
-    return {name: _as_matrix(m.data) for name, m in mats.items()}
+        raise InputError(param, str(path), "a readable Nastran OP4 file", str(e)) from None
+    return {name: _as_matrix(m.data, f"{param} {name}") for name, m in mats.items()}
 
 
-def read_dmig(path: str | Path) -> tuple[dict[str, Any], tuple[Label, ...]]:
+def read_dmig(
+    path: str | Path, param: str = "model.matrices"
+) -> tuple[dict[str, Any], tuple[Label, ...]]:
     """DMIG matrices of a Nastran punch/bulk file on the union of their (grid, component)."""
     from pyNastran.bdf.bdf import read_bdf
 
     try:
         model = read_bdf(str(path), punch=True, xref=False, debug=None, log=_quiet_log())
     except Exception as e:
-        raise InputError(
-            "model.matrices", str(path), "a Nastran punch file with DMIG cards", str(e)
-        ) from None
+        raise InputError(param, str(path), "a Nastran punch file with DMIG cards", str(e)) from None
     if not model.dmig:
         raise InputError(
-            "model.matrices",
+            param,
             str(path),
             "a Nastran punch file with DMIG cards",
             "no DMIG card found",
@@ -198,7 +199,7 @@ def read_dmig(path: str | Path) -> tuple[dict[str, Any], tuple[Label, ...]]:
         a, rows, cols = card.get_matrix(is_sparse=False, apply_symmetry=True)
         rl = [tuple(int(v) for v in rows[i]) for i in range(len(rows))]
         cl = [tuple(int(v) for v in cols[i]) for i in range(len(cols))]
-        parts[name] = (np.asarray(a, dtype=float), rl, cl)
+        parts[name] = (check_matrix(a, f"{param} {name}", square=False), rl, cl)
     labels = tuple(sorted({lab for _, r, c in parts.values() for lab in (*r, *c)}))
     index = {lab: i for i, lab in enumerate(labels)}
     out = {}
@@ -211,7 +212,9 @@ def read_dmig(path: str | Path) -> tuple[dict[str, Any], tuple[Label, ...]]:
     return out, labels
 
 
-def read_abaqus_mtx(path: str | Path) -> tuple[Any, tuple[Label, ...]]:
+def read_abaqus_mtx(
+    path: str | Path, param: str = "model.matrices"
+) -> tuple[Any, tuple[Label, ...]]:
     """An Abaqus ``*MATRIX GENERATE`` file (``FORMAT=MATRIX INPUT``).
 
     Each data line is ``row node, row dof, column node, column dof, value``;
@@ -221,7 +224,7 @@ def read_abaqus_mtx(path: str | Path) -> tuple[Any, tuple[Label, ...]]:
     """
     path = Path(path)
     ri, rc, ci, cc, vals = [], [], [], [], []
-    for k, line in enumerate(path.read_text().splitlines(), 1):
+    for k, line in enumerate(_text(path, param, "an Abaqus .mtx text file").splitlines(), 1):
         s = line.strip()
         if not s or s.startswith("*"):
             continue
@@ -239,16 +242,16 @@ def read_abaqus_mtx(path: str | Path) -> tuple[Any, tuple[Label, ...]]:
             raise InputError(f"{path.name} line {k}", s, "four whole numbers and a value") from None
         ri.append(a), rc.append(b), ci.append(c), cc.append(d), vals.append(v)
     if not vals:
-        raise InputError("model.matrices", str(path), "an Abaqus .mtx file with matrix entries")
+        raise InputError(param, str(path), "an Abaqus .mtx file with matrix entries")
     labels = tuple(sorted(set(zip(ri, rc, strict=True)) | set(zip(ci, cc, strict=True))))
     index = {lab: i for i, lab in enumerate(labels)}
     r = np.array([index[q] for q in zip(ri, rc, strict=True)])
     c = np.array([index[q] for q in zip(ci, cc, strict=True)])
     v = np.array(vals)
-    return _complete_symmetric(r, c, v, len(labels), path), labels
+    return _complete_symmetric(r, c, v, len(labels), path, param), labels
 
 
-def _complete_symmetric(r, c, v, n, path) -> sp.csr_matrix:
+def _complete_symmetric(r, c, v, n, path, param="model.matrices") -> sp.csr_matrix:
     off = r != c
     pairs = set(zip(r[off].tolist(), c[off].tolist(), strict=True))
     mirrored = sum((j, i) in pairs for i, j in pairs)
@@ -257,7 +260,7 @@ def _complete_symmetric(r, c, v, n, path) -> sp.csr_matrix:
         v = np.concatenate([v, v[off]])
     elif mirrored != len(pairs):
         raise InputError(
-            "model.matrices",
+            param,
             str(path),
             "one triangle of a symmetric matrix or the full square matrix",
             f"{mirrored} of {len(pairs)} off-diagonal entries have their mirror",
@@ -267,17 +270,58 @@ def _complete_symmetric(r, c, v, n, path) -> sp.csr_matrix:
     return m
 
 
-def read_matrix_market(path: str | Path) -> Any:
-    """A Matrix Market file (``scipy.io.mmread``), as CSR or dense."""
+_MM_ALLOWED = (
+    "a Matrix Market matrix file: '%%MatrixMarket matrix coordinate|array "
+    "real|double|integer general|symmetric'"
+)
+
+
+def read_matrix_market(path: str | Path, param: str = "model.matrices") -> Any:
+    """A Matrix Market file (``scipy.io.mmread``), as CSR or dense.
+
+    The header is checked first: a ``pattern`` file (no values), a
+    ``skew-symmetric`` or ``vector`` one, or an unknown word is refused, and
+    so is an entry given twice (summed silently otherwise).
+    """
     import scipy.io
 
+    path = Path(path)
+    with path.open("rb") as fh:
+        head = fh.readline(200).decode("ascii", "backslashreplace").split()
+    words = [w.lower() for w in head]
+    if len(words) != 5 or words[0] != "%%matrixmarket" or words[1] != "matrix":
+        raise InputError(param, str(path), _MM_ALLOWED, f"its first line is {' '.join(head)!r}")
+    fmt, field, sym = words[2:]
+    why = {
+        "pattern": "a pattern file holds no values",
+        "skew-symmetric": "a mass or stiffness matrix is symmetric, not skew-symmetric",
+    }
+    if field in why or sym in why:
+        raise InputError(param, str(path), _MM_ALLOWED, why.get(field) or why[sym])
+    if (
+        fmt not in ("coordinate", "array")
+        or field not in ("real", "double", "integer", "complex")
+        or sym not in ("general", "symmetric", "hermitian")
+    ):
+        raise InputError(param, str(path), _MM_ALLOWED, f"unknown header {' '.join(head)!r}")
     try:
-        return _as_matrix(scipy.io.mmread(str(path)))
-    except (ValueError, OSError) as e:
-        raise InputError("model.matrices", str(path), "a Matrix Market file", str(e)) from None
+        m = scipy.io.mmread(str(path))
+    except (ValueError, OSError, IndexError, TypeError) as e:
+        raise InputError(param, str(path), _MM_ALLOWED, str(e)[:160]) from None
+    if sp.issparse(m):
+        coo = m.tocoo()
+        keys = coo.row.astype(np.int64) * max(coo.shape[1], 1) + coo.col
+        if np.unique(keys).size != keys.size:
+            raise InputError(
+                param,
+                str(path),
+                "each entry once",
+                "an entry is given twice, or a symmetric file gives both triangles",
+            )
+    return _as_matrix(m, param)
 
 
-def read_harwell_boeing(path: str | Path) -> sp.csr_matrix:
+def read_harwell_boeing(path: str | Path, param: str = "model.matrices") -> sp.csr_matrix:
     """A real assembled Harwell-Boeing file (``scipy.io.hb_read``).
 
     scipy reads only unsymmetric (``RUA``) files; a symmetric ``RSA`` file
@@ -286,16 +330,16 @@ def read_harwell_boeing(path: str | Path) -> sp.csr_matrix:
     """
     import scipy.io
 
-    text = Path(path).read_text()
+    text = _text(Path(path), param, "a Harwell-Boeing text file")
     lines = text.splitlines(keepends=True)
     symmetric = len(lines) > 2 and lines[2][:3].upper() == "RSA"
     if symmetric:
         lines[2] = "RUA" + lines[2][3:]
     try:
         m = scipy.io.hb_read(io.StringIO("".join(lines))).tocsr()
-    except (ValueError, IndexError) as e:
+    except (ValueError, IndexError, TypeError) as e:
         raise InputError(
-            "model.matrices", str(path), "a real assembled Harwell-Boeing file (RUA or RSA)", str(e)
+            param, str(path), "a real assembled Harwell-Boeing file (RUA or RSA)", str(e)[:160]
         ) from None
     if symmetric:
         m = (m + m.T - sp.diags(m.diagonal())).tocsr()
@@ -305,7 +349,7 @@ def read_harwell_boeing(path: str | Path) -> sp.csr_matrix:
 # -- dispatch -----------------------------------------------------------------------------
 
 
-def file_kind(path: Path) -> str:
+def file_kind(path: Path, param: str = "model.matrices") -> str:
     """``op4``, ``dmig``, ``abaqus``, ``mm``, ``hb`` or ``numpy`` from suffix (and content)."""
     s = path.suffix.lower()
     if s in OP4_SUFFIXES:
@@ -322,36 +366,76 @@ def file_kind(path: Path) -> str:
         with path.open("rb") as fh:
             head = fh.read(64)
         return "mm" if head.lstrip().lower().startswith(b"%%matrixmarket") else "abaqus"
-    raise InputError("model.matrices", str(path), "a file ending in " + " ".join(SUFFIXES))
+    raise InputError(param, str(path), "a file ending in " + " ".join(SUFFIXES))
 
 
-def read_file(path: str | Path) -> tuple[dict[str, Any], tuple[Label, ...] | None]:
+_KIND_NAMES = {
+    "op4": "Nastran OP4",
+    "dmig": "Nastran DMIG punch",
+    "abaqus": "Abaqus .mtx",
+    "mm": "Matrix Market",
+    "hb": "Harwell-Boeing",
+    "numpy": ".npz or HDF5",
+}
+
+
+def read_file(
+    path: str | Path, param: str = "model.matrices"
+) -> tuple[dict[str, Any], tuple[Label, ...] | None]:
     """All matrices of one file by name, and its row labels if it has them.
 
     A file holding a single matrix (Abaqus, Matrix Market, Harwell-Boeing)
-    gives it under the file's stem.
+    gives it under the file's stem. ``param`` is the input that named the
+    file: every failure to read it is an InputError naming ``param`` and the
+    file, whatever the format's reader raised.
     """
     path = Path(path)
     if not path.is_file():
-        raise InputError("model.matrices", str(path), "an existing file")
-    kind = file_kind(path)
-    if kind == "op4":
-        return read_op4(path), None
-    if kind == "dmig":
-        return read_dmig(path)
-    if kind == "abaqus":
-        m, labels = read_abaqus_mtx(path)
-        return {path.stem: m}, labels
-    if kind == "mm":
-        return {path.stem: read_matrix_market(path)}, None
-    if kind == "hb":
-        return {path.stem: read_harwell_boeing(path)}, None
-    return _read_numpy(path), None
+        raise InputError(param, str(path), "an existing file")
+    kind = file_kind(path, param)
+    try:
+        if kind == "op4":
+            return read_op4(path, param=param), None
+        if kind == "dmig":
+            return read_dmig(path, param)
+        if kind == "abaqus":
+            m, labels = read_abaqus_mtx(path, param)
+            return {path.stem: m}, labels
+        if kind == "mm":
+            return {path.stem: read_matrix_market(path, param)}, None
+        if kind == "hb":
+            return {path.stem: read_harwell_boeing(path, param)}, None
+        return _read_numpy(path), None
+    except (WorkbenchError, MemoryError):
+        raise
+    except Exception as e:  # noqa: BLE001 - any reader failure is a bad file, named here
+        raise InputError(
+            param,
+            str(path),
+            f"a readable {_KIND_NAMES[kind]} file",
+            f"{type(e).__name__}: {str(e)[:160]}",
+        ) from None
+
+
+def _text(path: Path, param: str, what: str) -> str:
+    """The text of ``path``; a binary or unreadable file is an InputError naming ``param``."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as e:
+        raise InputError(
+            param,
+            str(path),
+            what,
+            f"byte 0x{e.object[e.start]:02x} at offset {e.start} is not text",
+        ) from None
+    except OSError as e:
+        raise InputError(param, str(path), f"a readable file ({what})", e.strerror or "") from None
 
 
 def read_matrices(
     files: dict[str, str | Path],
     dof_map: str | Path | None = None,
+    file_param: str | None = None,
 ) -> MatrixSet:
     """Read named matrices, each ``"file"`` or ``"file#NAME"``, onto one row numbering.
 
@@ -359,7 +443,8 @@ def read_matrices(
     matrix is. Labelled matrices (DMIG, Abaqus) are placed on the sorted
     union of their labels, so a mass matrix that omits massless DOFs still
     lines up with the stiffness. Unlabelled ones must all have the same size;
-    ``dof_map`` then gives their labels.
+    ``dof_map`` then gives their labels. ``file_param``: the input that
+    named the files (default ``model.<role>`` of each), named by the errors.
     """
     cache: dict[Path, tuple[dict[str, Any], tuple[Label, ...] | None]] = {}
     got: dict[str, tuple[Any, tuple[Label, ...] | None]] = {}
@@ -367,7 +452,7 @@ def read_matrices(
         fname, _, name = str(spec).partition("#")
         path = Path(fname)
         if path not in cache:
-            cache[path] = read_file(path)
+            cache[path] = read_file(path, file_param or f"model.{role}")
         arrays, labels = cache[path]
         if not name:
             if len(arrays) != 1:
@@ -392,6 +477,7 @@ def read_matrices(
             raise InputError(
                 "model.dof_map", str(dof_map), "empty", f"{source} carries its own node labels"
             )
+        _check_shared_nodes(got, files)
         union = tuple(sorted({lab for labs in labelled for lab in labs}))
         index = {lab: i for i, lab in enumerate(union)}
         out = {}
@@ -421,16 +507,32 @@ def read_matrices(
     return MatrixSet({role: m for role, (m, _) in got.items()}, labels, source)
 
 
+def _check_shared_nodes(got: dict[str, tuple[Any, Any]], files: dict[str, Any]) -> None:
+    """Labelled matrices of one model share nodes: disjoint node ids are two models."""
+    nodes = {role: {n for n, _ in labs} for role, (_, labs) in got.items() if labs}
+    if "stiffness" not in nodes:
+        return
+    ref = nodes["stiffness"]
+    for role, ids in nodes.items():
+        if role != "stiffness" and ids and not ids & ref:
+            raise InputError(
+                f"model.{role}",
+                str(files[role]),
+                "a matrix on the nodes of model.stiffness",
+                f"its node ids {min(ids)}..{max(ids)} share none with the stiffness's "
+                f"{min(ref)}..{max(ref)}",
+            )
+
+
 def _relabel(m, labs, index, n):
     perm = np.array([index[lab] for lab in labs])
     coo = sp.coo_matrix(m)
     return sp.csr_matrix((coo.data, (perm[coo.row], perm[coo.col])), shape=(n, n))
 
 
-def _as_matrix(a: Any) -> Any:
-    if sp.issparse(a):
-        return sp.csr_matrix(a, dtype=float)
-    return np.asarray(a, dtype=float)
+def _as_matrix(a: Any, param: str = "model.matrices") -> Any:
+    """A matrix read by a format's reader, checked (real, finite, a valid structure)."""
+    return check_matrix(a, param, square=False)
 
 
 def _read_numpy(path: Path) -> dict[str, Any]:

@@ -67,10 +67,17 @@ class ReducedModel:
         return (3 * nodes[:, None] + np.arange(3)[None, :]).ravel()
 
     def check(self) -> None:
-        """Shapes agree, K and M symmetric, M positive definite."""
+        """Real finite matrices whose shapes agree, K and M symmetric, M positive definite
+        (ValueError otherwise; a reduced model read from a file is checked before use)."""
         n = self.n
-        assert self.K.shape == (n, n) and self.M.shape == (n, n)
-        assert self.T.shape == (3 * self.n_nodes, n), (self.T.shape, self.n_nodes, n)
+        for name in ("K", "M", "T", "node_coords"):
+            A = np.asarray(getattr(self, name))
+            if A.dtype.kind not in "iuf" or A.ndim != 2 or not np.all(np.isfinite(A)):
+                raise ValueError(f"{self.name}: {name} is not a real finite matrix")
+        if self.K.shape != (n, n) or self.M.shape != (n, n):
+            raise ValueError(f"{self.name}: K {self.K.shape} and M {self.M.shape} differ")
+        if self.T.shape != (3 * self.n_nodes, n):
+            raise ValueError(f"{self.name}: T is {self.T.shape}, not {(3 * self.n_nodes, n)}")
         for name, A in (("K", self.K), ("M", self.M)):
             scale = max(np.abs(A).max(), 1e-300)
             asym = np.abs(A - A.T).max() / scale

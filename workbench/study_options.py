@@ -1,12 +1,14 @@
 """The study options table and the named robustness methods and hard cases (plain data).
 
 Every option of ``upd study`` is one :class:`Option` in :data:`OPTIONS`
-(name, type, default, help, allowed values); :mod:`workbench.studies.spec`
+(name, type, default, help, allowed values, and the physical range of a
+real rig with its reason); :mod:`workbench.studies.spec`
 turns them into a :class:`~workbench.studies.spec.StudySpec` from a TOML
 file and the command line, and the figures read an option's help text for
 their axis labels. The robustness study's solution methods
-(:data:`METHODS`) and hard cases (:data:`CASES`) are named here, where the
-options that list them are. Nothing here computes: it imports no study.
+(:data:`METHODS`) and hard cases (:data:`CASES`) are named in
+:mod:`workbench.hard_cases` and listed here by the options that name them.
+Nothing here computes: it imports no study.
 """
 
 from __future__ import annotations
@@ -15,99 +17,26 @@ from dataclasses import dataclass
 from typing import Any
 
 from .geometry.params import DAMPERS
-
-# the robustness study's solution methods: name -> (SolverOptions overrides, description)
-METHODS: dict[str, tuple[dict[str, Any], str]] = {
-    "default": (
-        {},
-        "analytic Jacobian, bt line search, arc length, secant predictor, "
-        "adaptive step (the options of every other study)",
-    ),
-    "fd-jacobian": ({"jacobian": "fd"}, "finite-difference Jacobian (dense, column by column)"),
-    "ls-basic": ({"line_search": "basic"}, "full Newton steps (SNES line search basic)"),
-    "ls-l2": ({"line_search": "l2"}, "SNES line search l2"),
-    "ls-cp": ({"line_search": "cp"}, "SNES line search cp (critical point)"),
-    "tangent-predictor": ({"predictor": "tangent"}, "tangent predictor instead of secant"),
-    "constant-predictor": (
-        {"predictor": "constant"},
-        "constant predictor (Newton starts at the last point)",
-    ),
-    "fixed-step": (
-        {"ds0": 0.01, "ds_min": 0.01, "ds_max": 0.01, "max_points": 3000},
-        "a fixed small arc-length step 0.01, never adapted (no halving on failure; "
-        "a budget of 3000 points instead of the study's max-points)",
-    ),
-    "frequency-stepping": (
-        {"continuation": "frequency"},
-        "plain frequency stepping (adaptive), no arc length",
-    ),
-}
-
-
-@dataclass(frozen=True)
-class HardCase:
-    """One hard case: a damper, a phase, a force and the study options it changes."""
-
-    damper: str
-    phase_deg: float
-    force_n: float
-    settings: dict[str, Any]
-    why: str
-
-
-# the robustness study's hard cases (workbench/studies/robustness.py solves them)
-CASES: dict[str, HardCase] = {
-    "near-separation": HardCase(
-        "cone",
-        0.0,
-        9.6,
-        {"cf": 1000.0},
-        "in-phase cone, centrifugal load 1 kN (a tenth of the default): the preload N0 is "
-        "small against the dynamic normal load, the pairs open for part of the period",
-    ),
-    "high-kt-ratio": HardCase(
-        "cone",
-        180.0,
-        9.6,
-        {"kt-line": 6.0e11, "mu": 0.1},
-        "out-of-phase cone, tangential stiffness x10 and friction coefficient / 5: "
-        "kt / (mu N0) is 50 times the default, the slip displacement 50 times smaller",
-    ),
-    "high-force": HardCase(
-        "cone",
-        180.0,
-        60.0,
-        {},
-        "out-of-phase cone at 60 N, twice the paper's highest level (gross slip)",
-    ),
-    "wedge-in-phase": HardCase(
-        "wedge",
-        0.0,
-        30.0,
-        {},
-        "in-phase wedge at 30 N: the faces separate (partly) around the peak",
-    ),
-    "turning-point": HardCase(
-        "cone",
-        0.0,
-        30.0,
-        {"damping": 5e-4},
-        "in-phase cone at 30 N with damping 0.05 %: the curve folds (softening with "
-        "separation) in a narrow frequency range, so plain frequency stepping must jump",
-    ),
-    "light-damping": HardCase(
-        "cone",
-        180.0,
-        9.6,
-        {"damping": 1e-4},
-        "out-of-phase cone with modal damping 0.01 %: a sharp, friction-dominated peak",
-    ),
-}
-
+from .hard_cases import CASES, METHODS, HardCase
+from .limits import (
+    BAND_MAX_HZ,
+    BAND_WHY,
+    CF_MAX_N,
+    CF_WHY,
+    FORCE_MAX_N,
+    FORCE_WHY,
+    K_FACE_N_PER_M3,
+    K_FACE_WHY,
+    K_LINE_N_PER_M2,
+    K_LINE_WHY,
+    UQ_THRESHOLD_MAX_MM,
+    UQ_THRESHOLD_WHY,
+)
 
 # the robustness study's names, for the options that list them
 ROBUSTNESS_METHODS = tuple(METHODS)
 ROBUSTNESS_CASES = tuple(CASES)
+__all__ = ["BY_NAME", "CASES", "KINDS", "METHODS", "OPTIONS", "HardCase", "Option"]
 
 
 KINDS = ("comparison", "sweep", "fidelity", "robustness", "uncertainty")
@@ -127,6 +56,12 @@ class Option:
     lo_open: bool = False
     choices: tuple[str, ...] | None = None
     optional: bool = False  # None allowed ("use the geometry/contact file's value")
+    unit: str = ""
+    # the range a real rig cannot leave (allow-extreme passes it) and its reason
+    soft_lo: float | None = None
+    soft_hi: float | None = None
+    why: str = ""
+    power_of_2: bool = False  # an int that must be a power of 2
 
     @property
     def attr(self) -> str:
@@ -136,6 +71,14 @@ class Option:
 OPTIONS: tuple[Option, ...] = (
     # what to compute
     Option("name", "str", "study", "a name for the study (report title, file names)", "study"),
+    Option(
+        "allow-extreme",
+        "bool",
+        False,
+        "accept values beyond the physical ranges of a real rig (forces, cf, contact "
+        "stiffness, bands, uq-threshold) for a numerical experiment; the numerical limits stay",
+        "study",
+    ),
     Option(
         "kind",
         "str",
@@ -162,6 +105,9 @@ OPTIONS: tuple[Option, ...] = (
         "cases",
         lo=0.0,
         lo_open=True,
+        unit="N",
+        soft_hi=FORCE_MAX_N,
+        why=FORCE_WHY,
     ),
     Option(
         "response-blade", "int", 1, "blade whose response is reported (1 or 2)", "cases", lo=1, hi=2
@@ -176,6 +122,9 @@ OPTIONS: tuple[Option, ...] = (
         "band",
         lo=0.0,
         lo_open=True,
+        unit="Hz",
+        soft_hi=BAND_MAX_HZ,
+        why=BAND_WHY,
     ),
     Option(
         "band-out-of-phase",
@@ -185,6 +134,9 @@ OPTIONS: tuple[Option, ...] = (
         "band",
         lo=0.0,
         lo_open=True,
+        unit="Hz",
+        soft_hi=BAND_MAX_HZ,
+        why=BAND_WHY,
     ),
     Option(
         "band-margin",
@@ -207,6 +159,9 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         optional=True,
+        unit="N",
+        soft_hi=CF_MAX_N,
+        why=CF_WHY,
     ),
     Option(
         "kt-line",
@@ -217,6 +172,10 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         optional=True,
+        unit="N/m per m",
+        soft_lo=K_LINE_N_PER_M2[0],
+        soft_hi=K_LINE_N_PER_M2[1],
+        why=K_LINE_WHY,
     ),
     Option(
         "kn-line",
@@ -227,6 +186,10 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         optional=True,
+        unit="N/m per m",
+        soft_lo=K_LINE_N_PER_M2[0],
+        soft_hi=K_LINE_N_PER_M2[1],
+        why=K_LINE_WHY,
     ),
     Option(
         "kt-face",
@@ -237,6 +200,10 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         optional=True,
+        unit="N/m per m^2",
+        soft_lo=K_FACE_N_PER_M3[0],
+        soft_hi=K_FACE_N_PER_M3[1],
+        why=K_FACE_WHY,
     ),
     Option(
         "kn-face",
@@ -247,6 +214,10 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         optional=True,
+        unit="N/m per m^2",
+        soft_lo=K_FACE_N_PER_M3[0],
+        soft_hi=K_FACE_N_PER_M3[1],
+        why=K_FACE_WHY,
     ),
     Option(
         "damping",
@@ -266,7 +237,9 @@ OPTIONS: tuple[Option, ...] = (
         "fidelity",
         lo=0.0,
         lo_open=True,
+        hi=1000.0,
         optional=True,
+        unit="mm",
     ),
     Option(
         "modes",
@@ -538,6 +511,7 @@ OPTIONS: tuple[Option, ...] = (
         "uncertainty",
         lo=2,
         hi=1 << 20,
+        power_of_2=True,
     ),
     Option(
         "uq-seed",
@@ -559,6 +533,9 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         optional=True,
+        unit="mm",
+        soft_hi=UQ_THRESHOLD_MAX_MM,
+        why=UQ_THRESHOLD_WHY,
     ),
     Option(
         "uq-schedule",

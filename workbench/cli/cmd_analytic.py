@@ -6,6 +6,7 @@ import argparse
 from typing import Any
 
 from .main import Context, num
+from .values import Value, add_value
 
 HELP = "cone damper kinematics: inclination and kinematic slip (paper eqs 1-6) + exact 3-D check"
 DESCRIPTION = """\
@@ -63,19 +64,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         help="damper length L along its axis, mm, > 0 (default 40); R2 = R1 + L tan(alpha_c)",
     )
     g = p.add_argument_group("charts (with --out)")
-    g.add_argument(
+    add_value(
+        g,
         "--points",
-        type=num,
-        default=23,
+        Value("int", 3, 10_000, name="points"),
+        "contact points per line for the 3-D slip table (23 as the paper)",
         metavar="N",
-        help="contact points per line for the 3-D slip table (default 23, as the paper)",
+        default=23,
     )
-    g.add_argument(
+    add_value(
+        g,
         "--step",
-        type=num,
-        default=0.25,
+        Value("float", 0.01, 5.0, unit="deg", name="step"),
+        "cone-angle step of the sweeps",
         metavar="DEG",
-        help="cone-angle step of the sweeps, deg, 0.01 .. 5 (default 0.25)",
+        default=0.25,
     )
 
 
@@ -90,6 +93,7 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     )
     n_points = check_int("points", args.points, 3, 10_000)
     step = check_range("step", args.step, 0.01, 5.0, unit="deg")
+    out = ctx.out_dir("results/analytic") if ctx.out is not None else None  # before any work
     with stage(ctx.timings, "kinematics"):
         pk = paper_kinematics(design)
         rk = rigid_body_kinematics(design, n_points=n_points)
@@ -123,11 +127,10 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         "solution with the middle section rolling; longitudinal slip shared equally by "
         "the two contact lines; best_* maximise over cone angles at this beta, R1, L",
     }
-    if ctx.out is not None:
+    if out is not None:
         from ..io import write_json
         from ..render.analytic_plots import write_analytic_figures
 
-        out = ctx.out_dir("results/analytic")
         with stage(ctx.timings, "figures"):
             files = write_analytic_figures(design, out, step_deg=step, n_points=n_points)
         files.append(write_json(out / "summary.json", summary))

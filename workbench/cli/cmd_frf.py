@@ -35,14 +35,7 @@ log = logging.getLogger(__name__)
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("model", type=Path, help="model file (TOML; see studies/examples)")
-    p.add_argument(
-        "--levels",
-        metavar="L1,L2,...",
-        help="excitation levels instead of the file's [excitation] levels",
-    )
-    p.add_argument("--band", metavar="F0,F1", help="frequency band in Hz instead of [band]")
-    p.add_argument("--harmonics", metavar="H0,H1,...", help="harmonic list instead of [hbm]")
-    p.add_argument("--nt", metavar="N", help="time samples per period instead of [hbm] nt")
+    add_model_values(p)
     p.add_argument("--no-stability", action="store_true", help="skip Hill's method")
     p.add_argument(
         "--no-figures",
@@ -51,49 +44,74 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _list(text: str | None, name: str, cast) -> list | None:
-    from ..errors import InputError
+def add_model_values(p: argparse.ArgumentParser) -> None:
+    """--levels, --band, --harmonics, --nt: the model file's values from the command line."""
+    from ..limits import FRF_BAND_RATIO_MAX, FRF_BAND_WHY, MAX_HARMONIC, MAX_NT, NT_WHY
+    from .values import Value, add_value
 
-    if text is None:
-        return None
-    try:
-        vals = [cast(v) for v in text.replace(" ", "").split(",") if v]
-    except ValueError:
-        raise InputError(name, text, "a comma-separated list of numbers") from None
-    if not vals:
-        raise InputError(name, text, "a comma-separated list of at least one number")
-    return vals
+    add_value(
+        p,
+        "--levels",
+        Value("floats", 0.0, None, lo_open=True),
+        "excitation levels instead of the file's [excitation] levels (at most 10^4 x the "
+        "largest slip force mu N0 over the force per unit level)",
+        metavar="L1,L2,...",
+    )
+    add_value(
+        p,
+        "--band",
+        Value(
+            "floats",
+            0.0,
+            None,
+            lo_open=True,
+            unit="Hz",
+            count=2,
+            ratio=FRF_BAND_RATIO_MAX,
+            why=FRF_BAND_WHY,
+        ),
+        "frequency band F0 < F1 instead of [band]",
+        metavar="F0,F1",
+    )
+    add_value(
+        p,
+        "--harmonics",
+        Value("ints", 0, MAX_HARMONIC),
+        "harmonic list instead of [hbm] harmonics (must include 1)",
+        metavar="H0,H1,...",
+    )
+    add_value(
+        p,
+        "--nt",
+        Value("int", 1, MAX_NT, why=NT_WHY),
+        "time samples per period instead of [hbm] nt (omit for automatic)",
+        metavar="N",
+    )
+
+
+def overrides(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
+    """The model file's keys replaced by the (checked) command-line values."""
+    over: dict[str, dict[str, Any]] = {}
+    if getattr(args, "levels", None) is not None:
+        over.setdefault("excitation", {})["levels"] = list(args.levels)
+    if getattr(args, "band", None) is not None:
+        over["band"] = {"start_hz": args.band[0], "end_hz": args.band[1]}
+    if getattr(args, "harmonics", None) is not None:
+        over.setdefault("hbm", {})["harmonics"] = list(args.harmonics)
+    if getattr(args, "nt", None) is not None:
+        over.setdefault("hbm", {})["nt"] = int(args.nt)
+    if getattr(args, "no_stability", False):
+        over.setdefault("solver", {})["stability"] = False
+    return over
 
 
 def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
-    from ..errors import InputError, SolveError
+    from ..errors import SolveError
     from ..hbm import frequency_response, load_frf_model
     from ..io import write_json
 
-    over: dict[str, dict[str, Any]] = {}
-    lv = _list(args.levels, "--levels", float)
-    if lv is not None:
-        over.setdefault("excitation", {})["levels"] = lv
-    band = _list(args.band, "--band", float)
-    if band is not None:
-        if len(band) != 2:
-            raise InputError("--band", args.band, "two frequencies F0,F1 in Hz")
-        over["band"] = {"start_hz": band[0], "end_hz": band[1]}
-    hs = _list(args.harmonics, "--harmonics", int)
-    if hs is not None:
-        over.setdefault("hbm", {})["harmonics"] = hs
-    if args.nt is not None:
-        nt = _list(args.nt, "--nt", int)
-        if len(nt) != 1 or nt[0] < 1:
-            # 0 would silently mean "automatic": refuse it, omitting --nt is the way
-            raise InputError(
-                "--nt", args.nt, "one whole number of samples per period >= 1 (omit for automatic)"
-            )
-        over.setdefault("hbm", {})["nt"] = nt[0]
-    if args.no_stability:
-        over.setdefault("solver", {})["stability"] = False
-    model = _load(args.model, over, load_frf_model)
-    out = ctx.out_dir(f"results/frf/{model.name}")
+    model = _load(args.model, overrides(args), load_frf_model)
+    ctx.out_dir(f"results/frf/{model.name}")
     mm = model.length_unit == "m"
     dimensionless = model.length_unit == "1"
     branches, rows, failures = [], [], []
@@ -111,19 +129,11 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
             label=f"{model.name} level {level:g}",
         )
         branches.append(b)
-        stem = f"curve_{i}"
-        files = {
-            "h5": str(b.save(out / f"{stem}.h5")),
-            "csv": str(b.to_csv(out / f"{stem}.csv", unit=model.length_unit)),
-        }
-        if b.n_points and b.status.shape[1] and not args.no_figures:
-            from ..render.curves import plot_status_map
-
-            files["png"] = str(
-                plot_status_map(
-                    b, out / f"{stem}.png", title=f"{model.name}: contact status, level {level:g}"
-                )
+        files = ctx.write(
+            lambda out, b=b, i=i, level=level: _curve_files(
+                b, i, level, model, out, figures=not args.no_figures
             )
+        )
         row = b.summary()
         row["peak_amplitude_unit"] = model.length_unit
         if mm and row["peak_amplitude"] is not None:
@@ -141,13 +151,15 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     if not args.no_figures:
         from ..render.curves import plot_frf
 
-        fig = plot_frf(
-            branches,
-            out / "frf.png",
-            unit_scale=1e3 if mm else 1.0,
-            unit="mm" if mm else model.length_unit,
-            title=f"{model.name}",
-            force_per_level_n=float(abs(model.f1).max()),
+        fig = ctx.write(
+            lambda out: plot_frf(
+                branches,
+                out / "frf.png",
+                unit_scale=1e3 if mm else 1.0,
+                unit="mm" if mm else model.length_unit,
+                title=f"{model.name}",
+                force_per_level_n=float(abs(model.f1).max()),
+            )
         )
     summary = {
         "model": str(model.path),
@@ -159,57 +171,46 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         "harmonics": list(model.harmonics),
         "nt": int(branches[0].nt) if branches else None,
         "figure": str(fig) if fig else None,
-        "out": str(out),
+        "out": "",
         "curves": rows,
     }
-    write_json(out / "summary.json", summary)
+    ctx.write(lambda out: write_json(out / "summary.json", ctx.note_rescue(summary)))
     if failures:
         raise SolveError(
             f"{len(failures)} of {len(rows)} curves stopped early ("
             + "; ".join(failures)
-            + f"); what was computed is in {out}"
+            + f"); what was computed is in {ctx.folder}"
         )
     return summary
 
 
-def _load(path: Path, over: dict, load_frf_model):
-    """The model file, with a damaged matrix file or a negative stiffness refused (exit 2)."""
-    import zipfile
+def _curve_files(b, i: int, level: float, model, out: Path, figures: bool = True) -> dict:
+    """curve_<i>.h5, .csv and (``figures``) the status map .png of one level's branch."""
+    stem = f"curve_{i}"
+    files = {
+        "h5": str(b.save(out / f"{stem}.h5")),
+        "csv": str(b.to_csv(out / f"{stem}.csv", unit=model.length_unit)),
+    }
+    if figures and b.n_points and b.status.shape[1]:
+        from ..render.curves import plot_status_map
 
-    import numpy as np
-
-    from ..config import read_toml
-    from ..errors import InputError, WorkbenchError
-
-    try:
-        model = load_frf_model(path, over)
-    except WorkbenchError:
-        raise
-    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as e:
-        # h5py/numpy on a truncated or corrupt .h5/.npz
-        name = (read_toml(path).get("model") or {}).get("matrices", "")
-        raise InputError(
-            "model.matrices",
-            name,
-            "a readable .npz or HDF5 file",
-            f"{type(e).__name__}: {str(e)[:160]}",
-        ) from None
-    K = model.system.K
-    d = np.asarray(K.diagonal() if hasattr(K, "diagonal") else np.diag(K), dtype=float)
-    if d.size and d.min() < 0:
-        i = int(np.argmin(d))
-        raise InputError(
-            "model.stiffness",
-            f"K[{i},{i}] = {d[i]:g}",
-            "a stiffness matrix without negative stiffness (no negative diagonal entry)",
-        )
-    if 0 < d.size <= 2000:  # small models: positive semi-definite (round-off allowed)
-        Kd = K.toarray() if hasattr(K, "toarray") else np.asarray(K, dtype=float)
-        lam = np.linalg.eigvalsh(0.5 * (Kd + Kd.T))
-        if lam[0] < -1e-9 * max(1.0, float(np.abs(lam).max())):
-            raise InputError(
-                "model.stiffness",
-                f"lowest eigenvalue {lam[0]:.4g}",
-                "a positive semi-definite stiffness matrix (no negative stiffness)",
+        files["png"] = str(
+            plot_status_map(
+                b, out / f"{stem}.png", title=f"{model.name}: contact status, level {level:g}"
             )
-    return model
+        )
+    return files
+
+
+def _load(path: Path, over: dict, load_frf_model):
+    """The model file with the command line's values; every check is the model file's
+    (workbench/hbm/modelfile.py, modelcheck.py), errors name the option typed."""
+    return load_frf_model(path, over, names=OVERRIDE_NAMES)
+
+
+# how the errors name a model-file key the command line overrides
+OVERRIDE_NAMES = {
+    "excitation.levels": "--levels",
+    "hbm.harmonics": "--harmonics",
+    "hbm.nt": "--nt",
+}

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from .main import Context, add_geometry_options, num
+from .main import Context, add_geometry_options
+from .values import Value, add_value
 
 HELP = "modes of the rig with the damper stuck or free (dolfinx + SLEPc), first bending named"
 DESCRIPTION = """\
@@ -41,9 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="{stuck,free}",
         help="contact pairs tied by springs (stuck, default) or absent (free)",
     )
-    parser.add_argument(
-        "--n", type=num, default=10, metavar="N", help="number of modes (default 10)"
-    )
+    add_value(parser, "--n", Value("int", 1, 200), "number of modes", metavar="N", default=10)
     add_geometry_options(parser, "contact parameters TOML (default geometry/contact.toml)")
     parser.add_argument("--no-png", action="store_true", help="skip the mode-shape pictures")
 

@@ -41,41 +41,84 @@ examples:
 log = logging.getLogger(__name__)
 
 
+# the nonlinear mode's own options: (flag, dest) used with a model file only
+MODEL_ONLY = (
+    ("--mode", "mode"),
+    ("--amplitudes", "amplitudes"),
+    ("--levels", "levels"),
+    ("--band", "band"),
+    ("--compare", "compare"),
+)
+# study options that a model file takes too (the others need a study file)
+MODEL_STUDY_OPTIONS = ("harmonics", "nt")
+RANGE_WHY = (
+    "relative to the first slip: below 1e-4 the mode is stuck, beyond 1e5 the contacts play no part"
+)
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    from ..limits import ENTRY_MAX, FRF_BAND_RATIO_MAX, FRF_BAND_WHY
     from ..studies.spec import add_arguments as add_study_options
+    from .values import Value, add_value
 
     p.add_argument(
         "file", type=Path, metavar="FILE", help="model file (TOML with [model]) or study file"
     )
     g = p.add_argument_group("nonlinear mode options")
-    g.add_argument(
+    add_value(
+        g,
         "--mode",
+        Value("int", 0, 100_000),
+        "model file: index of the stuck linear mode to follow, below the model's number of "
+        "DOFs (default: the one the excitation drives most in the band)",
         metavar="N",
-        help="index of the stuck linear mode to follow "
-        "(default: the one the excitation drives most in the band)",
     )
-    g.add_argument(
+    add_value(
+        g,
         "--range",
+        Value("floats", 1e-4, 1e5, count=2, rising=True, why=RANGE_WHY),
+        "modal amplitude range relative to the first slip or lift-off in the stuck mode",
         metavar="R0,R1",
         default="0.05,300",
-        help="modal amplitude range relative to the first slip or lift-off in the "
-        "stuck mode [default: 0.05,300]",
     )
-    g.add_argument(
+    add_value(
+        g,
         "--amplitudes",
+        Value("floats", 0.0, ENTRY_MAX, lo_open=True, count=2, rising=True, ratio=1e9),
+        "model file: absolute modal amplitude range (sqrt(kg) m) instead of --range",
         metavar="A0,A1",
-        help="absolute modal amplitude range (sqrt(kg) m) instead of --range",
     )
-    g.add_argument(
+    add_value(
+        g,
         "--steps",
+        Value("int", 1, 10_000),
+        "first step: the range over N steps",
         metavar="N",
         default="40",
-        help="first step: the range over N steps [default: 40]",
     )
-    g.add_argument(
-        "--levels", metavar="L1,L2,...", help="model file: excitation levels instead of the file's"
+    add_value(
+        g,
+        "--levels",
+        Value("floats", 0.0, None, lo_open=True),
+        "model file: excitation levels instead of the file's",
+        metavar="L1,L2,...",
     )
-    g.add_argument("--band", metavar="F0,F1", help="model file: band instead of [band]")
+    add_value(
+        g,
+        "--band",
+        Value(
+            "floats",
+            0.0,
+            None,
+            lo_open=True,
+            unit="Hz",
+            count=2,
+            ratio=FRF_BAND_RATIO_MAX,
+            why=FRF_BAND_WHY,
+        ),
+        "model file: band F0 < F1 instead of [band]",
+        metavar="F0,F1",
+    )
     g.add_argument(
         "--compare",
         action="store_true",
@@ -84,68 +127,59 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_study_options(p)
 
 
-def _list(text: str | None, name: str, cast) -> list | None:
-    from ..errors import InputError
-
-    if text is None:
-        return None
-    if isinstance(text, list):
-        return [cast(v) for v in text]
-    try:
-        return [cast(v) for v in str(text).replace(" ", "").split(",") if v]
-    except ValueError:
-        raise InputError(name, text, "a comma-separated list of numbers") from None
-
-
-def _pair(text: str | None, name: str) -> tuple[float, float] | None:
-    from ..errors import InputError
-
-    v = _list(text, name, float)
-    if v is None:
-        return None
-    if len(v) != 2:
-        raise InputError(name, text, "two numbers A,B")
-    return (v[0], v[1])
-
-
 def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..config import read_toml
     from ..errors import InputError
+    from ..studies.spec import OPTIONS
 
     if not args.file.is_file():
         raise InputError("FILE", str(args.file), "an existing model or study file (TOML)")
     data = read_toml(args.file)
-    if "model" in data:
+    if not data:
+        raise InputError(
+            "FILE", str(args.file), "a model file ([model]) or a study file", "it is empty"
+        )
+    if "model" in data:  # a study option the model file would ignore is refused
+        for o in OPTIONS:
+            if hasattr(args, o.attr) and o.name not in MODEL_STUDY_OPTIONS:
+                raise InputError(
+                    f"--{o.name}",
+                    getattr(args, o.attr),
+                    f"no --{o.name} with a model file ([model] in {args.file.name})",
+                    "it is a study option; a model file takes --harmonics and --nt",
+                )
         return _run_model(args, ctx)
+    for flag, dest in MODEL_ONLY:  # ... and so is a model-file option with a study file
+        v = getattr(args, dest)
+        if v not in (None, False):
+            raise InputError(
+                flag,
+                v,
+                f"no {flag} with a study file ({args.file.name} has no [model])",
+                "the study's nonlinear modes are its first bending pair, one per damper and family",
+            )
     return _run_study(args, ctx)
 
 
 def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
-    from ..errors import SolveError
+    from ..errors import SolveError, check_int
     from ..hbm import frequency_response, load_frf_model
     from ..hbm.nlmodes import nonlinear_mode
     from ..hbm.synthesis import synthesize
     from ..io import write_json
     from ..render.nlmode_figures import plot_backbones, plot_synthesis
+    from ..studies.spec import BY_NAME, check_option
+    from .cmd_frf import OVERRIDE_NAMES, overrides
 
-    over: dict[str, dict[str, Any]] = {}
-    lv = _list(args.levels, "--levels", float)
-    if lv is not None:
-        over.setdefault("excitation", {})["levels"] = lv
-    band = _pair(args.band, "--band")
-    if band is not None:
-        over["band"] = {"start_hz": band[0], "end_hz": band[1]}
-    hs = _list(getattr(args, "harmonics", None), "--harmonics", int)
-    if hs is not None:
-        over.setdefault("hbm", {})["harmonics"] = hs
-    if getattr(args, "nt", None) is not None:
-        over.setdefault("hbm", {})["nt"] = _list(args.nt, "--nt", int)[0]
-    model = load_frf_model(args.file, over)
+    for name in MODEL_STUDY_OPTIONS:  # the study options' own rule
+        if hasattr(args, name):
+            setattr(args, name, check_option(BY_NAME[name], getattr(args, name)))
+    model = load_frf_model(args.file, overrides(args), names=OVERRIDE_NAMES)
     out = ctx.out_dir(f"results/nlmodes/{model.name}")
-    mode = None if args.mode is None else _list(args.mode, "--mode", int)[0]
-    amps = _pair(args.amplitudes, "--amplitudes")
-    rel = _pair(args.range, "--range")
-    steps = _list(args.steps, "--steps", int)[0]
+    mode = None if args.mode is None else check_int("--mode", args.mode, 0, model.system.n - 1)
+    amps = None if args.amplitudes is None else tuple(args.amplitudes)
+    rel = tuple(args.range)
+    steps = args.steps
     nm = nonlinear_mode(
         model.system,
         mode=mode,
@@ -162,20 +196,24 @@ def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         levels=model.levels,
         label=model.name,
     )
-    files = {
-        "h5": str(nm.save(out / "backbone.h5")),
-        "csv": str(nm.to_csv(out / "backbone.csv", unit=model.length_unit)),
-    }
+    files = ctx.write(
+        lambda d: {
+            "h5": str(nm.save(d / "backbone.h5")),
+            "csv": str(nm.to_csv(d / "backbone.csv", unit=model.length_unit)),
+        }
+    )
     mm = model.length_unit == "m"
     scale, unit = (1e3, "mm") if mm else (1.0, model.length_unit)
     if nm.n_points:
         files["backbone_png"] = str(
-            plot_backbones(
-                [(model.name, nm)],
-                out / "backbone.png",
-                unit_scale=scale,
-                unit=unit,
-                title=f"{model.name}: nonlinear mode {nm.mode}",
+            ctx.write(
+                lambda d: plot_backbones(
+                    [(model.name, nm)],
+                    d / "backbone.png",
+                    unit_scale=scale,
+                    unit=unit,
+                    title=f"{model.name}: nonlinear mode {nm.mode}",
+                )
             )
         )
     levels, syns, hbm = [], [], []
@@ -220,15 +258,17 @@ def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         levels.append(row)
     if syns:
         files["synthesis_png"] = str(
-            plot_synthesis(
-                nm,
-                syns,
-                out / "synthesis.png",
-                hbm=hbm or None,
-                unit_scale=scale,
-                unit=unit,
-                band_hz=model.band_hz,
-                title=f"{model.name}: forced responses from the mode",
+            ctx.write(
+                lambda d: plot_synthesis(
+                    nm,
+                    syns,
+                    d / "synthesis.png",
+                    hbm=hbm or None,
+                    unit_scale=scale,
+                    unit=unit,
+                    band_hz=model.band_hz,
+                    title=f"{model.name}: forced responses from the mode",
+                )
             )
         )
     t_nm = float(nm.timings.get("total", 0.0))
@@ -249,10 +289,10 @@ def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     if args.compare:
         summary["hbm_s"] = round(t_hbm, 4)
         summary["time_ratio"] = round(t_nm / t_hbm, 4) if t_hbm > 0 else None
-    write_json(out / "summary.json", summary)
+    ctx.write(lambda d: write_json(d / "summary.json", ctx.note_rescue(summary)))
     if nm.failed:
         raise SolveError(
-            f"the backbone stopped early ({nm.message}); what was computed is in {out}"
+            f"the backbone stopped early ({nm.message}); what was computed is in {ctx.folder}"
         )
     return summary
 
@@ -269,8 +309,8 @@ def _run_study(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     if spec.kind not in ("comparison", "sweep"):
         raise InputError("kind", spec.kind, "comparison or sweep (a study with damper models)")
     out = ctx.out_dir(f"results/{spec.name}")
-    rel = _pair(args.range, "--range")
-    steps = _list(args.steps, "--steps", int)[0]
+    rel = tuple(args.range)
+    steps = args.steps
     res = study_backbones(spec, out, relative_range=rel, n_steps=steps)
     if mpi_rank() != 0:
         return {}

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from .main import Context, add_geometry_options, num
+from .main import Context, add_geometry_options
+from .values import Value, add_value
 
 HELP = "Craig-Bampton reduced models of the rig and the damper (HDF5, cached)"
 DESCRIPTION = """\
@@ -30,12 +31,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--damper", required=True, metavar="{cone,cylinder,wedge}", help="damper shape"
     )
-    parser.add_argument(
+    add_value(
+        parser,
         "--modes",
-        type=num,
-        default=12,
+        Value("int", 0, 500),
+        "fixed-interface modes per body (12 as in the paper)",
         metavar="M",
-        help="fixed-interface modes per body (default 12, as in the paper)",
+        default=12,
     )
     parser.add_argument(
         "--rigid-damper",

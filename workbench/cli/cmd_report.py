@@ -23,8 +23,19 @@ def run(args: argparse.Namespace, ctx) -> dict:
     if not args.dir.is_dir():
         raise InputError("DIR", str(args.dir), "an existing study folder")
     check_manifest(args.dir / "manifest.json")
+    if not ctx.out:  # the report goes into DIR: it must take a file
+        from ..io import unwritable
+
+        why = unwritable(args.dir)
+        if why is not None:
+            raise InputError(
+                "DIR", str(args.dir), "a study folder you can write to (or give --out)", why
+            )
     target = write_report(args.dir, (ctx.out_dir(".") / "report.html") if ctx.out else None)
     return {"report": str(target), "bytes": target.stat().st_size}
+
+
+REQUIRED = ("title", "sections")  # what every study writes and the report cannot do without
 
 
 def check_manifest(path: Path) -> dict:
@@ -77,6 +88,16 @@ def check_manifest(path: Path) -> dict:
                 m[key] if len(str(m[key])) < 40 else "...",
                 f"a JSON {'array' if typ is list else 'object'} (in {path})",
             )
+    missing = [k for k in REQUIRED if k not in m]
+    if missing:
+        raise InputError(
+            "manifest",
+            str(path),
+            "a manifest written by upd study (with " + ", ".join(REQUIRED) + ")",
+            "it has no " + ", ".join(missing) + "; run upd study again to rewrite it",
+        )
+    if not isinstance(m["title"], str):
+        raise InputError("manifest title", m["title"], f"a JSON string (in {path})")
     for i, sec in enumerate(m.get("sections", [])):
         if not isinstance(sec, dict):
             raise InputError(f"manifest sections[{i}]", sec, f"a JSON object (in {path})")

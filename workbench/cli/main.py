@@ -28,13 +28,15 @@ import os
 import re
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from .. import __version__
 from ..errors import InputError, WorkbenchError
-from ..io import to_jsonable
+from ..io import rescue_folder, to_jsonable, unwritable, utf8_name
+from .values import check_values
 
 COMMANDS = ["analytic", "mesh", "modes", "reduce", "screen", "frf", "nlmodes", "study", "report"]
 
@@ -50,15 +52,28 @@ class Context:
     debug: bool
     timings: dict[str, float] = field(default_factory=dict)
     created: list[Path] = field(default_factory=list)  # folders out_dir made, outermost first
+    command: str = "upd"
+    folder: Path | None = None  # where the results go (out_dir's, or the rescue folder)
+    rescued: str = ""  # why the results went to a rescue folder, if they did
 
     def out_dir(self, default: str) -> Path:
-        """The output folder (``--out`` or ``default``), created.
+        """The output folder (``--out`` or ``default``), created and proven writable.
 
-        A path that cannot be a folder (an existing file, ``/proc/x``, no
-        permission) is an InputError naming ``--out``.
+        Called before any work: a path that cannot be a folder (an existing
+        file, ``/proc/x``, ``/sys/kernel``, a read-only file system, no
+        permission) is an InputError naming ``--out``, so no computed work
+        is lost to it.
         """
         p = self.out if self.out is not None else Path(default)
         what = "--out" if self.out is not None else "output folder"
+        shown = utf8_name(str(p.absolute()))
+        if shown is not None:
+            raise InputError(
+                what,
+                _Shown(shown),
+                "a folder whose path is UTF-8",
+                "rename the folder, or work from a folder whose name is UTF-8",
+            )
         if p.exists() and not p.is_dir():
             raise InputError(what, str(p), "a folder", "it is an existing file")
         new = [q for q in (p, *p.parents) if not q.exists()][::-1]
@@ -69,9 +84,34 @@ class Context:
                 what, str(p), "a folder that can be created", e.strerror or type(e).__name__
             ) from None
         self.created += new
-        if not os.access(p, os.W_OK | os.X_OK):
-            raise InputError(what, str(p), "a folder you can write to", "permission denied")
+        why = unwritable(p)
+        if why is not None:
+            raise InputError(what, str(p), "a folder you can write to", why)
+        self.folder = p
         return p
+
+    def write(self, fn: Callable[[Path], Any]) -> Any:
+        """``fn(folder)``: write results into the output folder; if that fails once the work
+        is done (the disk filled, the folder went away), write them into a rescue folder
+        instead, say where in a warning and in the summary (``out``, ``out_note``)."""
+        assert self.folder is not None, "out_dir() first"
+        try:
+            return fn(self.folder)
+        except OSError as e:
+            if self.rescued:
+                raise
+            self.rescued = f"could not write to {self.folder} ({e.strerror or e})"
+            self.folder = rescue_folder(self.command)
+            log.warning("%s; the results are written to %s instead", self.rescued, self.folder)
+            return fn(self.folder)
+
+    def note_rescue(self, summary: dict[str, Any]) -> dict[str, Any]:
+        """``summary`` with ``out`` the folder the results are in, and why if rescued."""
+        if self.folder is not None:
+            summary["out"] = str(self.folder)
+        if self.rescued:
+            summary["out_note"] = f"{self.rescued}; the results are in {self.folder}"
+        return summary
 
     def remove_empty_created(self) -> None:
         """Remove the folders :meth:`out_dir` made if nothing but empty folders is in them
@@ -110,12 +150,12 @@ def _common(suppress: bool) -> argparse.ArgumentParser:
     )
     g.add_argument(
         "--out",
-        type=Path,
         metavar="DIR",
         default=d(None),
         help="folder for the files this command writes (default: a folder under ./results "
         "named after the command and its damper or study, e.g. results/modes_cone; created "
-        "if missing, and printed as out: in the summary)",
+        "if missing, and printed as out: in the summary); a non-empty UTF-8 path of a "
+        "folder you can write to, checked before any work",
     )
     g.add_argument("-v", "--verbose", action="count", default=d(0), help="more log messages")
     g.add_argument(
@@ -133,12 +173,16 @@ def _common(suppress: bool) -> argparse.ArgumentParser:
 
 def add_geometry_options(parser: argparse.ArgumentParser, contact_help: str | None = None) -> None:
     """--size and --geometry (and --contact-file with its help, if given) of the FE commands."""
+    from ..geometry.params import MAX_SIZE_MM
+
     parser.add_argument(
         "--size",
         type=num,
         metavar="MM",
         default=None,
-        help="global element size of the rig, mm (default: [rig.mesh] size_mm)",
+        help="global element size of the rig, mm (default: [rig.mesh] size_mm); "
+        f"0 < MM <= {MAX_SIZE_MM:g}, and coarse enough for at most a few million "
+        "tetrahedra",
     )
     parser.add_argument(
         "--geometry",
@@ -179,7 +223,7 @@ def build_parser() -> argparse.ArgumentParser:
             formatter_class=argparse.RawDescriptionHelpFormatter,
         )
         mod.add_arguments(p)
-        p.set_defaults(_run=mod.run)
+        p.set_defaults(_run=mod.run, _parser=p)
     return parser
 
 
@@ -251,10 +295,16 @@ def main(argv: list[str] | None = None) -> int:
     from .. import log as wlog
 
     wlog.setup(args.verbose - args.quiet)
-    ctx = Context(out=args.out, json=args.json, debug=args.debug)
+    reconfigure = getattr(sys.stderr, "reconfigure", None)
+    if reconfigure is not None:  # a message quoting a non-UTF-8 name never fails to print
+        reconfigure(errors="backslashreplace")
+    ctx = Context(out=None, json=args.json, debug=args.debug, command=args.command)
     prog = f"upd {args.command}"
     t0 = time.perf_counter()
     try:
+        check_names(args._parser, args)
+        check_values(args._parser, args)
+        ctx.out = out_path(args.out)
         summary = args._run(args, ctx)
     except WorkbenchError as e:
         if args.debug:
@@ -302,6 +352,44 @@ def _emit(summary: dict[str, Any] | None, as_json: bool, t0: float) -> None:
     else:
         sys.stdout.write(_human(json.loads(json.dumps(summary, default=to_jsonable))) + "\n")
     sys.stdout.flush()
+
+
+def out_path(text: str | None) -> Path | None:
+    """``--out`` as a path; an empty one is refused (it would mean the current folder)."""
+    if text is None:
+        return None
+    if not str(text).strip():
+        raise InputError(
+            "--out",
+            str(text),
+            "a folder name",
+            "an empty --out would write into the current folder",
+        )
+    return Path(text)
+
+
+def check_names(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Every file or folder name given is UTF-8 (HDF5, gmsh, JSON and HTML need it)."""
+    for a in parser._actions:  # noqa: SLF001 - argparse has no public list of actions
+        v = getattr(args, a.dest, None)
+        for item in v if isinstance(v, list) else [v]:
+            if isinstance(item, (str, Path)):
+                shown = utf8_name(str(item))
+                if shown is not None:
+                    name = a.option_strings[-1] if a.option_strings else (a.metavar or a.dest)
+                    raise InputError(
+                        name,
+                        _Shown(shown),
+                        "a UTF-8 name",
+                        "it has bytes that are not UTF-8; rename it",
+                    )
+
+
+class _Shown(str):
+    """A name shown in an error as it is (its escapes written once, not doubled)."""
+
+    def __repr__(self) -> str:
+        return f"'{self}'"
 
 
 def num(text: str) -> float | str:

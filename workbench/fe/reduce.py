@@ -185,8 +185,10 @@ def _load_if_current(path: Path, dig: str) -> ReducedModel | None:
             log.warning("%s is unreadable; rebuilding it", path)
         return None
     try:
-        return ReducedModel.load(path)
-    except (OSError, KeyError, ValueError) as e:
+        rm = ReducedModel.load(path)
+        rm.check()  # its matrices reach LAPACK and PETSc: a damaged file is rebuilt instead
+        return rm
+    except (OSError, KeyError, ValueError, TypeError, np.linalg.LinAlgError) as e:
         log.warning("%s is unreadable (%s); rebuilding it", path, e)
         return None
 

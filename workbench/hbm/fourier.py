@@ -30,6 +30,25 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError, check_int
+from ..limits import check_memory
+
+
+def memory_estimate(harmonics: tuple[int, ...], nt: int, n: int, n_el: int) -> float:
+    """Bytes a harmonic balance of this size holds at once (an upper estimate).
+
+    The time grid (``E``, ``P``: nt x nh), the contact samples and their
+    derivatives (n_el x nt x 3 and 3 x nt x 3 nh per element), and the dense
+    Jacobian on the nonlinear unknowns with its factorisation (two (nh m)^2
+    matrices, ``m`` = min(n, 3 n_el) when there are contacts). Hill's
+    eigenproblem is left out (it may be sparse): a refusal on this estimate
+    is a computation that cannot run, not one that might be tight.
+    """
+    nh = sum(1 if h == 0 else 2 for h in harmonics)
+    m = min(n, 3 * n_el) if n_el else n
+    grid = 4 * 8 * nt * nh
+    aft = 8 * nt * (7 * n_el + 9 * nh) + 8 * 9 * n_el * nh * nh
+    jac = 2 * 8 * (nh * m) ** 2
+    return float(grid + aft + jac)
 
 
 def default_nt(harmonics: tuple[int, ...]) -> int:
@@ -73,6 +92,8 @@ class Fourier:
             raise InputError(
                 "nt", nt, f"nt > 2 * max(harmonics) = {2 * max(hs)} (sampling theorem)"
             )
+        nh = sum(1 if h == 0 else 2 for h in hs)
+        check_memory(4 * 8 * nt * nh, "nt", nt, f"the {nt} x {nh} time grid of the AFT")
         object.__setattr__(self, "harmonics", hs)
         object.__setattr__(self, "nt", nt)
         k, kind = [], []

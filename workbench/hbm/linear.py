@@ -24,6 +24,33 @@ import scipy.sparse as sp
 from ..errors import SolveError
 from .fourier import Fourier
 
+SPREAD_MAX = 1e12  # eigenvalues of (K_r, M) spread wider lose the receptances' digits
+
+
+def check_regular(lam: np.ndarray) -> None:
+    """The stuck system ``(K_r, M)`` is regular and well-conditioned, else a SolveError
+    that says which: a rigid-body mode (lowest eigenvalue at round-off) is singular; a
+    positive lowest eigenvalue far below the highest is ill-conditioning, and names the
+    inputs that cause it."""
+    top = max(float(np.abs(lam).max()), 1e-300)
+    low = float(lam.min())
+    if low > top / SPREAD_MAX:
+        return
+    if low > 100 * np.finfo(float).eps * top:
+        raise SolveError(
+            "the linear system with every contact stuck is ill-conditioned: the eigenvalues "
+            f"of (K_r, M) span {top / low:.3g} (from {low:.4g} to {top:.4g}; at most "
+            f"{SPREAD_MAX:.0e} is resolved). K_r is the stiffness plus the contact springs: "
+            "a contact stiffness far above the structure's own (kt-line, kn-line, kt-face, "
+            "kn-face of a study; kt_n_per_m, kn_n_per_m of a model file) or matrices in mixed "
+            "units cause it; lower the contact stiffness or check the units"
+        )
+    raise SolveError(
+        "the linear system with every contact stuck is singular (lowest eigenvalue "
+        f"{low:.3e} of (K_r, M), at round-off of the highest {top:.3e}): a rigid-body mode is "
+        "held by no support and no contact element; add contact elements or supports"
+    )
+
 
 def _combine(fourier: Fourier, T: np.ndarray, coef: np.ndarray) -> np.ndarray:
     """Multiply each complex harmonic of T (nh, m) by ``coef`` (one row (m,) per harmonic of
@@ -56,13 +83,7 @@ class ModalLinear:
     ):
         self.fourier = fourier
         lam, phi = modes if modes is not None else sla.eigh(Kr, M)
-        top = max(abs(lam).max(), 1e-300)
-        if lam.min() <= 1e-12 * top:
-            raise SolveError(
-                "the linear system with every contact stuck is singular (lowest eigenvalue "
-                f"{lam.min():.3e} of (K_r, M)): a rigid-body mode is held by no support and no "
-                "contact element; add contact elements or supports"
-            )
+        check_regular(lam)
         self.phi = phi
         self.wn = np.sqrt(lam)
         if C is not None:
@@ -177,13 +198,7 @@ class DirectLinear:
             self._lu0 = sla.lu_factor(Kr, check_finite=False) if fourier.has_dc else None
         except sla.LinAlgError:
             self._lu0 = None
-        lam = sla.eigvalsh(Kr, M)
-        if lam.min() <= 1e-12 * max(abs(lam).max(), 1e-300):
-            raise SolveError(
-                "the linear system with every contact stuck is singular (lowest eigenvalue "
-                f"{lam.min():.3e} of (K_r, M)): a rigid-body mode is held by no support and no "
-                "contact element; add contact elements or supports"
-            )
+        check_regular(sla.eigvalsh(Kr, M))
 
     def _factor(self, omega: float) -> None:
         if self._omega == omega:

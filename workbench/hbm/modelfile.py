@@ -68,16 +68,29 @@ DOF indices::
 from __future__ import annotations
 
 import dataclasses
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..config import load_record, param, read_toml
 from ..contact import LAWS, ContactElements
-from ..errors import InputError, check_range, did_you_mean
+from ..errors import InputError, WorkbenchError, check_int, check_range, did_you_mean
+from ..limits import (
+    ENTRY_MAX,
+    ENTRY_WHY,
+    FRF_BAND_RATIO_MAX,
+    FRF_BAND_WHY,
+    MAX_HARMONIC,
+    MAX_NT,
+    MU_MAX,
+    MU_WHY,
+    NT_WHY,
+)
+from ..matrix_checks import csr_from_parts
+from . import modelcheck
 from .options import SolverOptions
 from .system import System
 
@@ -116,7 +129,7 @@ class BandSection:
 @dataclass(frozen=True)
 class HbmSection:
     harmonics: list = param([0, 1, 2, 3], "harmonic list (must include 1)")
-    nt: int = param(0, "time samples per period (0: automatic)", lo=0)
+    nt: int = param(0, "time samples per period (0: automatic)", lo=0, hi=MAX_NT, why=NT_WHY)
 
 
 @dataclass(frozen=True)
@@ -133,11 +146,18 @@ class ContactSection:
     nodes: list = param([], "node ids of the elements (instead of dofs; needs node labels)")
     other_nodes: list = param([], "facing node id per element (instead of other)")
     components: list = param([1, 2, 3], "node components (1-6) for t1, t2, n; -1: none")
-    mu: float = param(0.5, "friction coefficient", lo=0.0)
-    kt_n_per_m: float = param(0.0, "tangential stiffness, N/m", lo=0.0)
-    kt2_n_per_m: float = param(-1.0, "second tangential stiffness, N/m (default: kt_n_per_m)")
-    kn_n_per_m: float = param(0.0, "normal stiffness, N/m", lo=0.0)
-    n0_n: float = param(0.0, "normal preload, N (compressive positive)", lo=0.0)
+    mu: float = param(0.5, "friction coefficient", lo=0.0, hi=MU_MAX, why=MU_WHY)
+    kt_n_per_m: float = param(0.0, "tangential stiffness, N/m", lo=0.0, hi=ENTRY_MAX, why=ENTRY_WHY)
+    kt2_n_per_m: float = param(
+        -1.0,
+        "second tangential stiffness, N/m (default: kt_n_per_m)",
+        hi=ENTRY_MAX,
+        why=ENTRY_WHY,
+    )
+    kn_n_per_m: float = param(0.0, "normal stiffness, N/m", lo=0.0, hi=ENTRY_MAX, why=ENTRY_WHY)
+    n0_n: float = param(
+        0.0, "normal preload, N (compressive positive)", lo=0.0, hi=ENTRY_MAX, why=ENTRY_WHY
+    )
     law: str = param("decoupled", "friction law", choices=LAWS)
 
 
@@ -172,22 +192,11 @@ class FrfModel:
 
 
 def _read_arrays(path: Path) -> dict[str, Any]:
-    if path.suffix == ".npz":
-        with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
-    if path.suffix in (".h5", ".hdf5"):
-        import h5py
+    from ..readers import NUMPY_SUFFIXES, _read_numpy
 
-        out: dict[str, Any] = {}
-        with h5py.File(path, "r") as h:
-
-            def visit(name, obj):
-                if isinstance(obj, h5py.Dataset):
-                    out[name] = obj[()]
-
-            h.visititems(visit)
-        return out
-    raise InputError("model.matrices", str(path), "a .npz or .h5/.hdf5 file")
+    if path.suffix not in NUMPY_SUFFIXES:
+        raise InputError("model.matrices", str(path), "a .npz or .h5/.hdf5 file")
+    return _read_numpy(path)
 
 
 def _matrix(arrays: dict[str, Any], name: str, key: str, file: Path):
@@ -196,9 +205,8 @@ def _matrix(arrays: dict[str, Any], name: str, key: str, file: Path):
     parts = [f"{name}{s}" for s in ("_data", "_indices", "_indptr", "_shape")]
     parts_h5 = [f"{name}/{s}" for s in ("data", "indices", "indptr", "shape")]
     for p in (parts, parts_h5):
-        if all(q in arrays for q in p):
-            shape = tuple(int(v) for v in arrays[p[3]])
-            return sp.csr_matrix((arrays[p[0]], arrays[p[1]], arrays[p[2]]), shape=shape)
+        if all(q in arrays for q in p):  # each part checked: a bad index would crash SciPy
+            return csr_from_parts(arrays[p[0]], arrays[p[1]], arrays[p[2]], arrays[p[3]], key)
     names = sorted(
         {
             k.split("/")[0].rsplit("_", 1)[0]
@@ -258,18 +266,31 @@ def _read_model_matrices(m: ModelSection, path: Path):
                 m.static_force,
                 "empty for an FE export (a vector needs a .npz/.h5)",
             )
-        ms = readers.read_matrices({r: f"{mfile}#{v}" for r, v in roles.items()}, dof_map)
+        ms = readers.read_matrices(
+            {r: f"{mfile}#{v}" for r, v in roles.items()}, dof_map, "model.matrices"
+        )
         M, K = ms.matrices["mass"], ms.matrices["stiffness"]
         return M, K, ms.matrices.get("damping"), None, ms
-    arrays = _read_arrays(mfile)
+    try:
+        arrays = _read_arrays(mfile)
+    except WorkbenchError:
+        raise
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as e:
+        # numpy/h5py on a truncated or corrupt .npz/.h5
+        raise InputError(
+            "model.matrices",
+            m.matrices,
+            "a readable .npz or HDF5 file",
+            f"{type(e).__name__}: {str(e)[:160]}",
+        ) from None
     M = _matrix(arrays, m.mass, "model.mass", mfile)
     K = _matrix(arrays, m.stiffness, "model.stiffness", mfile)
     C = _matrix(arrays, m.damping, "model.damping", mfile) if m.damping else None
     fs = None
     if m.static_force:
-        fs = np.asarray(_matrix(arrays, m.static_force, "model.static_force", mfile), float).ravel()
+        fs = _matrix(arrays, m.static_force, "model.static_force", mfile)
     labels = readers.read_dof_map(dof_map) if dof_map else None
-    if labels is not None and len(labels) != M.shape[0]:
+    if labels is not None and len(labels) != np.shape(M)[0]:
         raise InputError(
             "model.dof_map", m.dof_map, f"{M.shape[0]} rows (one per DOF)", f"it has {len(labels)}"
         )
@@ -338,20 +359,19 @@ def _int_list(key: str, value: Any, n: int, allow_none: bool = False) -> list[in
 
 
 def _float_list(
-    key: str, value: Any, lo: float | None = None, lo_open: bool = False
+    key: str,
+    value: Any,
+    lo: float | None = None,
+    lo_open: bool = False,
+    hi: float | None = None,
 ) -> list[float]:
     if not isinstance(value, list):
         raise InputError(key, value, "a list of numbers")
-    return [check_range(f"{key}[{i}]", v, lo, lo_open=lo_open) for i, v in enumerate(value)]
+    return [check_range(f"{key}[{i}]", v, lo, hi, lo_open=lo_open) for i, v in enumerate(value)]
 
 
-def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) -> FrfModel:
-    """Read and check a model file; ``overrides`` replaces keys (``{"band": {...}}``)."""
-    path = Path(path)
-    data = read_toml(path)
-    for key, val in (overrides or {}).items():
-        data.setdefault(key, {})
-        data[key].update(val)
+def _sections(data: dict[str, Any], complete: bool = True) -> tuple[dict, list]:
+    """The checked records of a model file's tables (``complete``: the required keys too)."""
     for key in data:
         if key not in _SECTIONS:
             raise InputError(
@@ -362,7 +382,7 @@ def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) ->
             )
     band = data.get("band", {})
     for key in ("start_hz", "end_hz"):
-        if not isinstance(band, dict) or key not in band:
+        if complete and (not isinstance(band, dict) or key not in band):
             raise InputError(f"band.{key}", "missing", "a frequency > 0 Hz in the table [band]")
     sec = {}
     for key, cls in _SECTIONS.items():
@@ -372,18 +392,98 @@ def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) ->
         if not isinstance(tab, dict):
             raise InputError(key, tab, f"a table [{key}]")
         sec[key] = load_record(cls, tab, f"{key}.")
+    modelcheck.check_solver(sec["solver"])
     groups = data.get("contact", [])
     if isinstance(groups, dict):
         groups = [groups]
     if not isinstance(groups, list):
         raise InputError("contact", groups, "tables [[contact]]")
     contact = [load_record(ContactSection, g, f"contact[{i}].") for i, g in enumerate(groups)]
+    e: ExcitationSection = sec["excitation"]
+    _float_list("excitation.amplitudes_n", e.amplitudes_n, -ENTRY_MAX, hi=ENTRY_MAX)
+    _float_list("excitation.phases_deg", e.phases_deg, -360.0, hi=360.0)
+    _float_list("excitation.levels", e.levels, 0.0, lo_open=True, hi=ENTRY_MAX)
+    b: BandSection = sec["band"]
+    if complete or "start_hz" in band:
+        lo = check_range("band.start_hz", b.start_hz, 0.0, lo_open=True, unit="Hz")
+        if complete or "end_hz" in band:
+            hi = check_range("band.end_hz", b.end_hz, lo, lo_open=True, unit="Hz")
+            if hi / lo > FRF_BAND_RATIO_MAX:
+                raise InputError(
+                    "band",
+                    [lo, hi],
+                    f"end_hz / start_hz <= {FRF_BAND_RATIO_MAX:g} (it is {hi / lo:.3g})",
+                    FRF_BAND_WHY,
+                )
+    h: HbmSection = sec["hbm"]
+    if not isinstance(h.harmonics, list):
+        raise InputError("hbm.harmonics", h.harmonics, "a list of whole numbers")
+    for i, k in enumerate(h.harmonics):
+        if isinstance(k, float):  # 1.0 in a list of harmonics is a typo, not a harmonic
+            raise InputError(f"hbm.harmonics[{i}]", k, "a whole number (no decimal point)")
+        check_int(f"hbm.harmonics[{i}]", k, 0, MAX_HARMONIC)
+    if h.nt and h.harmonics and h.nt <= 2 * max(h.harmonics):
+        raise InputError(
+            "hbm.nt",
+            h.nt,
+            f"hbm.nt > 2 x the highest harmonic = {2 * max(h.harmonics)}",
+            "the sampling theorem; 0 picks one",
+        )
+    return sec, contact
 
+
+def load_frf_model(
+    path: str | Path,
+    overrides: dict[str, Any] | None = None,
+    names: dict[str, str] | None = None,
+) -> FrfModel:
+    """Read and check a model file; ``overrides`` replaces keys (``{"band": {...}}``).
+
+    The file's own values are checked first, also those that ``overrides``
+    replaces (a typo in the file does not hide behind a command-line value).
+    ``names``: how the errors call an overridden key (``{"band": "--band"}``).
+    """
+    path = Path(path)
+    data = read_toml(path)
+    if not data:
+        raise InputError(
+            "file",
+            str(path),
+            "a model file with the tables [model], [excitation], [band], [output]",
+            "it is empty",
+        )
+    if overrides:
+        try:
+            _sections(data, complete=False)
+        except InputError as e:
+            why = (e.why + "; " if e.why else "") + (
+                f"in {path.name}, checked although the command line overrides it"
+            )
+            raise InputError(e.param, e.value, e.allowed, why) from None
+    for key, val in (overrides or {}).items():
+        data.setdefault(key, {})
+        data[key].update(val)
+    try:
+        return _build(path, data)
+    except InputError as e:
+        for key, flag in (names or {}).items():
+            sect, _, k = key.partition(".")
+            given = sect in (overrides or {}) and (not k or k in overrides[sect])
+            rest = e.param[len(key) :]
+            if given and e.param.startswith(key) and rest[:1] in ("", "[", "."):
+                index = rest if rest.startswith("[") else ""
+                raise InputError(flag + index, e.value, e.allowed, e.why) from None
+        raise
+
+
+def _build(path: Path, data: dict[str, Any]) -> FrfModel:
+    sec, contact = _sections(data)
     m: ModelSection = sec["model"]
     M, K, C, fs, labels = _read_model_matrices(m, path)
+    M, K, C, fs = modelcheck.check_matrices(M, K, C, fs, labels)
     n = M.shape[0]
 
-    parts = []
+    parts, groups = [], []
     for i, g in enumerate(contact):
         where = f"contact[{i}]"
         if g.nodes:
@@ -396,13 +496,15 @@ def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) ->
         other = None
         if g.other:
             other = g.other if isinstance(g.other[0], list) else [g.other]
+            if not all(isinstance(el, list) for el in other):
+                raise InputError(f"{where}.other", g.other, "one list of DOFs per element")
             _int_list(f"{where}.other", [d for el in other for d in el], n, allow_none=True)
-        frames = np.asarray(g.frames, dtype=float) if g.frames else None
+        frames = modelcheck.frames(f"{where}.frames", g.frames) if g.frames else None
         if g.kt_n_per_m <= 0 and any(len(el) >= 1 and el[0] >= 0 for el in dofs):
             raise InputError(f"{where}.kt_n_per_m", g.kt_n_per_m, "a tangential stiffness > 0 N/m")
         kt2 = g.kt_n_per_m if g.kt2_n_per_m < 0 else g.kt2_n_per_m
-        parts.append(
-            ContactElements.from_dofs(
+        try:
+            part = ContactElements.from_dofs(
                 n,
                 dofs,
                 other=other,
@@ -414,7 +516,11 @@ def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) ->
                 n0=g.n0_n,
                 law=g.law,
             )
-        )
+        except InputError as e:  # name the group: "dofs[1]" -> "contact[0].dofs[1]"
+            raise InputError(f"{where}.{e.param}", e.value, e.allowed, e.why) from None
+        modelcheck.check_contact_group(where, part, dofs, frames, K)
+        parts.append(part)
+        groups.append((where, part))
     elements = ContactElements.concat(parts) if parts else None
 
     e: ExcitationSection = sec["excitation"]
@@ -437,13 +543,13 @@ def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) ->
     f1 = np.zeros(n, complex)
     for d, a, ph in zip(dofs, amps, phases, strict=True):
         f1[d] += a * np.exp(1j * np.radians(ph))
+    modelcheck.check_levels("excitation.levels", levels, f1, groups)
 
     b: BandSection = sec["band"]
-    lo = check_range("band.start_hz", b.start_hz, 0.0, lo_open=True, unit="Hz")
-    hi = check_range("band.end_hz", b.end_hz, lo, lo_open=True, unit="Hz")
+    lo, hi = float(b.start_hz), float(b.end_hz)
 
     h: HbmSection = sec["hbm"]
-    harm = _int_list("hbm.harmonics", h.harmonics, 10_001)
+    harm = list(h.harmonics)
     o: OutputSection = sec["output"]
     outs = _int_list("output.dofs", _resolve_nodes("output.dofs", o.dofs, labels), n)
     if not outs:
@@ -451,6 +557,14 @@ def load_frf_model(path: str | Path, overrides: dict[str, Any] | None = None) ->
     names = tuple(str(v) for v in o.names) if o.names else tuple(f"dof{d}" for d in outs)
     if len(names) != len(outs):
         raise InputError("output.names", o.names, f"{len(outs)} names (one per output DOF)")
+    modelcheck.check_stiffness(M, K, elements, groups)
+    modelcheck.check_size(
+        tuple(harm),
+        h.nt,
+        n,
+        elements.n_el if elements else 0,
+        "hbm.nt" if h.nt else "hbm.harmonics",
+    )
 
     system = System(
         M=M,

@@ -27,17 +27,21 @@ import scipy.sparse as sp
 
 from ..contact import ContactElements
 from ..errors import InputError
+from ..matrix_checks import csr_from_parts, real_values
 
 
 def as_dense(A: object, name: str, n: int | None = None) -> np.ndarray:
     """A dense float matrix (from ndarray or scipy.sparse), square and finite."""
     if A is None:
         raise InputError(name, None, "a square matrix")
-    if sp.issparse(A):
-        A = A.toarray()
+    if sp.issparse(A):  # its structure checked first: a bad index would crash SciPy
+        A = A.tocsr()
+        A = csr_from_parts(A.data, A.indices, A.indptr, A.shape, name).toarray()
     try:
-        A = np.array(A, dtype=float)
-    except (TypeError, ValueError):
+        A = real_values(np.asarray(A), name)  # complex is refused, never cast
+    except (TypeError, ValueError) as e:
+        if isinstance(e, InputError):
+            raise
         raise InputError(name, type(A).__name__, "a real square matrix") from None
     if A.ndim != 2 or A.shape[0] != A.shape[1]:
         raise InputError(name, f"shape {A.shape}", "a square matrix")

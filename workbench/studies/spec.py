@@ -17,6 +17,7 @@ from typing import Any
 
 from ..config import read_toml
 from ..errors import InputError, check_choice, check_int, check_range, did_you_mean
+from ..limits import BAND_RATIO_MAX, BAND_RATIO_WHY, EXTREME_HINT
 from ..study_options import (
     BY_NAME,
     DAMPERS,
@@ -91,8 +92,37 @@ def _split(text: Any) -> list[Any]:
     return [text]
 
 
-def check_option(o: Option, value: Any) -> Any:
-    """Check and convert one value for option ``o``; InputError names the option."""
+def check_option(o: Option, value: Any, extreme: bool = False) -> Any:
+    """Check and convert one value for option ``o``; InputError names the option.
+
+    ``extreme``: accept values beyond the option's physical range (the
+    ``allow-extreme`` option); its hard range still applies.
+    """
+    v = _check_option(o, value, extreme)
+    if not extreme and o.kind in ("float", "int") and v is not None:
+        _check_soft(o, v, value)
+    if o.power_of_2 and v is not None and v & (v - 1):
+        raise InputError(
+            o.name,
+            value,
+            f"a power of 2 ({', '.join(str(1 << k) for k in range(1, 6))}, ...)",
+            "the Sobol sequence is balanced only at powers of 2",
+        )
+    return v
+
+
+def _check_soft(o: Option, v: float, value: Any) -> None:
+    """The physical range of a real rig (``soft_lo``/``soft_hi``), with its reason."""
+    lo, hi = o.soft_lo, o.soft_hi
+    if (lo is None or v >= lo) and (hi is None or v <= hi):
+        return
+    u = f" {o.unit}" if o.unit else ""
+    left = "" if lo is None else f"{lo:g} <= "
+    right = "" if hi is None else f" <= {hi:g}"
+    raise InputError(o.name, value, f"{left}{o.name}{right}{u}", f"{o.why}; {EXTREME_HINT}")
+
+
+def _check_option(o: Option, value: Any, extreme: bool) -> Any:
     if value is None:
         if o.optional:
             return None
@@ -132,7 +162,7 @@ def check_option(o: Option, value: Any) -> Any:
         out = []
         for i, v in enumerate(items):
             sub = dataclasses.replace(o, name=f"{o.name}[{i}]", kind=k[:-1], optional=False)
-            out.append(check_option(sub, v))
+            out.append(check_option(sub, v, extreme))
         if k == "strs" and len(set(out)) != len(out):
             raise InputError(o.name, items, "distinct values")
         return out
@@ -147,6 +177,10 @@ def resolve(
     """Merge defaults, a study file's values and command-line values into a spec."""
     values: dict[str, Any] = {}
     source: dict[str, str] = {}
+    extreme = False  # allow-extreme is read first: it decides how the others are checked
+    for given in (file_values or {}, cli_values or {}):
+        if "allow-extreme" in given:
+            extreme = check_option(BY_NAME["allow-extreme"], given["allow-extreme"])
     for o in OPTIONS:
         values[o.attr] = o.default if not isinstance(o.default, list) else list(o.default)
         source[o.name] = "default"
@@ -164,7 +198,7 @@ def resolve(
                     ("unknown key" + (f"; {hint}" if hint else "")) + f" in {origin}",
                 )
             o = BY_NAME[key]
-            values[o.attr] = check_option(o, v)
+            values[o.attr] = check_option(o, v, extreme)
             source[key] = origin
     spec = StudySpec(**values)
     object.__setattr__(spec, "source", source)
@@ -177,6 +211,13 @@ def _check_consistency(spec: StudySpec) -> None:
         band = getattr(spec, name.replace("-", "_"))
         if band and (len(band) != 2 or band[0] >= band[1]):
             raise InputError(name, band, "[] (automatic) or [lo, hi] with lo < hi, Hz")
+        if band and not spec.allow_extreme and band[1] > BAND_RATIO_MAX * band[0]:
+            raise InputError(
+                name,
+                band,
+                f"[lo, hi] with hi <= {BAND_RATIO_MAX:g} x lo, Hz",
+                f"{BAND_RATIO_WHY}; {EXTREME_HINT}",
+            )
     if not spec.forces:
         raise InputError("forces", spec.forces, "at least one force, N")
     if not spec.phases:
@@ -187,6 +228,12 @@ def _check_consistency(spec: StudySpec) -> None:
         raise InputError("harmonics", spec.harmonics, "a list containing 1 (the excitation)")
     if len(set(spec.harmonics)) != len(spec.harmonics):
         raise InputError("harmonics", spec.harmonics, "distinct harmonics")
+    if spec.nt is not None and spec.nt <= 2 * max(spec.harmonics):
+        raise InputError(
+            "nt",
+            spec.nt,
+            f"nt > 2 x the highest harmonic = {2 * max(spec.harmonics)} (the sampling theorem)",
+        )
     if spec.sweep is not None:
         if spec.sweep not in BY_NAME or BY_NAME[spec.sweep].kind not in ("float", "int"):
             scalars = [o.name for o in OPTIONS if o.kind in ("float", "int")]
@@ -199,12 +246,64 @@ def _check_consistency(spec: StudySpec) -> None:
         if not spec.sweep_values:
             raise InputError("sweep-values", spec.sweep_values, "at least one value")
         for i, v in enumerate(spec.sweep_values):
-            check_option(dataclasses.replace(BY_NAME[spec.sweep], name=f"sweep-values[{i}]"), v)
+            check_option(
+                dataclasses.replace(BY_NAME[spec.sweep], name=f"sweep-values[{i}]"),
+                v,
+                spec.allow_extreme,
+            )
+    _check_kind_options(spec)
+
+
+def _check_kind_options(spec: StudySpec) -> None:
+    """Options a study kind does not use are checked all the same (a typo in them is a
+    typo), and options that only a sweep uses are refused elsewhere (they would be
+    ignored in silence)."""
+    if spec.sweep_values and spec.sweep is None:
+        raise InputError(
+            "sweep-values", spec.sweep_values, "no sweep-values without sweep (the option swept)"
+        )
+    if spec.kind == "sweep" and spec.sweep is None:
+        raise InputError("sweep", None, "the option to sweep (kind = 'sweep')")
+    if spec.sweep is not None and spec.kind != "sweep":
+        raise InputError(
+            "sweep",
+            spec.sweep,
+            "no sweep unless kind = 'sweep'",
+            f"kind is {spec.kind!r}, which does not sweep",
+        )
+    from ..post.uncertainty import parse_distribution
+    from .fidelity_plan import parse_harmonics
+    from .uq_samples import _VALID
+
+    for i, text in enumerate(spec.levels_harmonics):
+        parse_harmonics(text, f"levels-harmonics[{i}]")
+    for name, (vlo, vhi) in _VALID.items():
+        opt = f"uq-{name}"
+        text = getattr(spec, opt.replace("-", "_"))
+        lo, hi = parse_distribution(opt, text).support
+        if (
+            lo < vlo
+            or (vlo == 0.0 and name in ("cf", "kt", "kn") and lo <= 0.0)
+            or (vhi is not None and hi > vhi)
+        ):
+            raise InputError(
+                opt,
+                text,
+                f"a distribution within [{vlo:g}, {vhi if vhi is not None else 'inf'}]"
+                " (give bounds)",
+            )
 
 
 def load_study(path: str | Path | None, cli_values: Mapping[str, Any] | None = None) -> StudySpec:
     """Read a study file (or only defaults when ``path`` is None) and apply CLI values."""
     file_values = read_toml(path) if path is not None else {}
+    if path is not None and not file_values:
+        raise InputError(
+            "file",
+            str(path),
+            "a study file with at least one option",
+            "it is empty; give no file for the built-in defaults",
+        )
     for key, v in file_values.items():
         if isinstance(v, dict):
             raise InputError(
@@ -284,6 +383,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     for o in OPTIONS:
         g = groups.setdefault(o.group, parser.add_argument_group(f"{o.group} options"))
         default = "" if o.default in (None, []) else f" [default: {_fmt_default(o.default)}]"
+        default += range_text(o)
         if o.kind == "bool":
             g.add_argument(
                 f"--{o.name}",
@@ -300,6 +400,39 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                 metavar=_metavar(o),
                 help=o.help + default,
             )
+
+
+def range_text(o: Option) -> str:
+    """What an option allows, for its help: '; 0 < X <= 10000 N (beyond: --allow-extreme)'."""
+    if o.choices:
+        return ""  # the help names them
+    if o.kind == "bool":
+        return ""
+    if o.kind in ("str", "path", "strs"):
+        return ""
+    whole = o.kind in ("int", "ints")
+    x = "N" if whole else "X"
+    lo = "" if o.lo is None else f"{o.lo:g} {'<' if o.lo_open else '<='} "
+    hi = "" if o.hi is None else f" <= {o.hi:g}"
+    if o.soft_lo is not None:
+        lo = f"{o.soft_lo:g} <= "
+    if o.soft_hi is not None:
+        hi = f" <= {o.soft_hi:g}"
+    u = f" {o.unit}" if o.unit else ""
+    what = "whole number" if whole else "number"
+    if o.kind.endswith("s"):
+        text = f"; {what}s, each {lo}{x}{hi}{u}" if lo or hi else f"; {what}s{u}"
+    else:
+        text = f"; a {what} {lo}{x}{hi}{u}" if lo or hi else f"; a {what}{u}"
+    if o.kind == "percent":
+        text = f"; {lo}{x}{hi} %%"
+    if o.name in ("band-in-phase", "band-out-of-phase"):
+        text += f", hi <= {BAND_RATIO_MAX:g} x lo"
+    if o.power_of_2:
+        text += ", a power of 2"
+    if o.soft_lo is not None or o.soft_hi is not None:
+        text += " (beyond: --allow-extreme)"
+    return text
 
 
 def _metavar(o: Option) -> str:
