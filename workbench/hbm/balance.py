@@ -35,14 +35,11 @@ element to O(1/nt^2) while the normal load stays positive; where the
 contact opens and the force jumps, the harmonic work (the quantity that
 balances the excitation) can differ from it and even change sign.
 
-Accuracy indicator (``PointData.accuracy``): the energy balance above
-closes at any converged point, however coarse the sampling, so it cannot
-tell a poor solution. The indicator compares two estimates of the contact
-work per cycle that agree only when the sampling resolves the loop: the
-trapezoid rule on the converged loops (tangential and normal) against the
-harmonic (Galerkin) work, ``|E_loop - W_harm| / |W_ext|`` (a fraction of
-the excitation work). It falls as ``nt`` grows (O(1/nt^2) for a slipping
-loop) and is what :func:`frequency_response` warns about.
+Accuracy indicator (``PointData.accuracy``): the energy balance closes at
+any converged point however coarse the sampling, so the indicator compares
+two estimates of the contact work that agree only when the sampling
+resolves the loop: ``|E_loop - W_harm| / |W_ext|`` (trapezoid on the loops
+against the harmonic work). It falls as O(1/nt^2) for a slipping loop.
 
 Mean-position anchor: when a body is held by its contacts alone (rigid-body
 modes in ``K``) and every contact holding it slips at some instant, the
@@ -172,8 +169,6 @@ class HarmonicBalance:
             self.W = self.el.W
             self.act = np.flatnonzero(self.el.active.ravel())
             self.kc = self.el.kc
-            ac = self.el.active
-            self._active_pairs = (ac[:, :, None] & ac[:, None, :])[:, :, None, :, None]
         else:
             self.W = sp.csr_matrix((0, self.n))
             self.act = np.zeros(0, dtype=int)
@@ -266,8 +261,8 @@ class HarmonicBalance:
         h = np.arange(f.nh)
         for a in range(3):
             D[:, a, h, a, h] -= self.kc[:, a][:, None]
-        # an inactive direction (zero row of W) never moves and acts on nothing: no entries
-        D *= self._active_pairs
+        ac = self.el.active  # an inactive direction (zero row of W) never moves: no entries
+        D *= (ac[:, :, None] & ac[:, None, :])[:, :, None, :, None]
         if f.has_dc and self.anchor.any():
             G[0] += self.anchor * Uloc[0]
             for a in range(2):
