@@ -118,13 +118,13 @@ def plot_sweep(
             family_name(p) + (f", F = {forces[0]:g} N" if len(forces) == 1 else "")
         )
         axes[1, col].set_xlabel(_axis_label(option))
-    axes[0, 0].set_ylabel("peak response amplitude (mm)")
+    axes[0, 0].set_ylabel("vibration amplitude at\nresonance, harmonic 1 (mm)")
     axes[1, 0].set_ylabel("resonance frequency (Hz)")
     for col, p in enumerate(fams):
         amps = [
-            c.amp_mm[c.peak_index]
+            c.h1_mm[c.h1_peak_index]
             for c in cases
-            if c.peak_index >= 0 and abs(c.phase_deg - p) < 1e-9
+            if c.h1_peak_index >= 0 and abs(c.phase_deg - p) < 1e-9
         ]
         if _wants_log(amps, 30.0):
             axes[0, col].set_yscale("log")
@@ -204,7 +204,7 @@ def plot_cone_angle_energy(
                 ms=10,
                 mew=2,
             )
-    energies = [c.energy_mj[c.peak_index].sum() for c in cones if c.peak_index >= 0]
+    energies = [c.energy_mj[c.h1_peak_index].sum() for c in cones if c.h1_peak_index >= 0]
     if _wants_log(energies, 30.0):
         a1.set_yscale("log")
         _readable_log(a1, "y")
