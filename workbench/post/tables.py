@@ -315,6 +315,7 @@ class SweepCurve:
     energy_mj: np.ndarray
     stable: np.ndarray
     failed: np.ndarray
+    verdict: np.ndarray | None = None  # stability code at each peak (1, 0, -1, ...)
 
     @property
     def family(self) -> str:
@@ -341,6 +342,7 @@ def sweep_curve(cases: Iterable[CaseResult], option: str) -> SweepCurve:
         energy_mj=np.array([v[2] for v in vals]),
         stable=np.array([v[3] for v in vals]),
         failed=np.array([bool(c.branch.failed) for c in cases]),
+        verdict=np.array([_peak_extra(c)[0] for c in cases], dtype=int),
     )
 
 
@@ -548,7 +550,7 @@ def sweep_table(curves: Sequence[SweepCurve]) -> Table:
                     fixed(sc.freq_hz[k], 5),
                     num(sc.amp_mm[k], 4),
                     energy_text(sc.energy_mj[k], floor),
-                    "failed" if sc.failed[k] else ("stable" if sc.stable[k] else "not stable"),
+                    "failed" if sc.failed[k] else _verdict_word(sc, k),
                 )
             )
     return Table(
@@ -564,6 +566,14 @@ def sweep_table(curves: Sequence[SweepCurve]) -> Table:
         ),
         tuple(rows),
     )
+
+
+def _verdict_word(sc: SweepCurve, k: int) -> str:
+    from ..render.palette import verdict_label
+
+    if sc.verdict is None:
+        return "stable" if sc.stable[k] else "not stable"
+    return verdict_label(int(sc.verdict[k]))
 
 
 def _nan(v: Any) -> float:

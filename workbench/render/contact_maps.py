@@ -166,9 +166,10 @@ def render_contact_maps(
     heading = _heading(case, i)
     side = np.asarray(case.side, dtype=int)
 
-    def base() -> object:
+    def base(opacity: float = 0.3) -> object:
+        # the damper in its own colour; fainter under the energy colours
         p = pv.Plotter(off_screen=True, window_size=WINDOW)
-        p.add_mesh(surface, color=damper_color(case.damper), opacity=0.3, **look)
+        p.add_mesh(surface, color=damper_color(case.damper), opacity=opacity, **look)
         p.add_text(heading, font_size=11, position="upper_edge")
         # label the first pair of each side, so the numbering of the status charts can be found
         for s in (0, 1):
@@ -207,7 +208,7 @@ def render_contact_maps(
     # energy: pairs above the floor coloured on the (shared) scale, the others grey
     from ..post.tables import ENERGY_FLOOR_REL, STUCK_TEXT
 
-    p = base()
+    p = base(0.15)
     lo, hi, log_scale = scale if scale is not None else energy_scale([energy])
     floor = ENERGY_FLOOR_REL * hi if hi > 0 else 0.0
     slip = np.isfinite(energy) & (energy > floor)

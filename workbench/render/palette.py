@@ -88,7 +88,7 @@ STATUS_COLORS: tuple[str, str, str, str] = ("#3d3d3d", "#D55E00", "#E69F00", "#F
 STATUS_EDGE = "#3d3d3d"  # outline of the light status colours on white (lines, spheres)
 
 # a pair with no dissipation in an energy map (stuck, rolling or open): not an energy colour
-ZERO_ENERGY_COLOR = "#c8c8c8"
+ZERO_ENERGY_COLOR = "#a3a3a3"
 ENERGY_CMAP = "viridis"
 NOT_COMPUTED_COLOR, NOT_COMPUTED_EDGE = "#f2f2f2", "#b0b0b0"
 RESONANCE_COLOR = "#000000"  # the marked resonance peak in status maps

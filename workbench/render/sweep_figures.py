@@ -17,6 +17,7 @@ from ..errors import InputError
 from ..post.results import CaseResult, family_name
 from ..post.tables import sweep_curve, sweep_value
 from .common import pyplot, save_figure, styled
+from .palette import marker_kwargs
 from .study_style import (
     DAMPER_STYLE,
     FAMILY_STYLE,
@@ -109,10 +110,9 @@ def plot_sweep(
                         lw=1.7,
                         label=lab if (row == 0 and col == 0) else None,
                     )
-                    bad = ~sc.stable
-                    ax.plot(
-                        sc.value[bad], y[bad], ls="none", marker=mk, ms=6, mfc="white", mec=color
-                    )
+                    codes = sc.verdict if sc.verdict is not None else sc.stable.astype(int)
+                    for k in np.flatnonzero(codes != 1):  # hollow: unstable, half: unknown
+                        ax.plot(sc.value[k], y[k], **marker_kwargs(int(codes[k]), color, mk))
                     ax.plot(sc.value[sc.failed], y[sc.failed], "x", color=color, ms=10, mew=2)
         axes[0, col].set_title(
             family_name(p) + (f", F = {forces[0]:g} N" if len(forces) == 1 else "")
