@@ -229,3 +229,21 @@ def test_section_positions_never_read_minus_zero():
 def test_verdict_dataclass_is_frozen():
     with pytest.raises(dataclasses.FrozenInstanceError):
         palette.VERDICTS[0].label = "x"  # type: ignore[misc]
+
+
+def test_how_sure_names_the_failed_curve_and_the_synthesis_check():
+    from workbench.post.answer import answer
+
+    r = synthetic_study(("cone", "wedge"), forces=(9.6, 30.0), fail=("wedge", 0.0, 30.0))
+    r.extras["nlmodes"] = {
+        "rows": [
+            {"label": "cone, in-phase", "force_n": 30.0, "error_pct": -0.51, "valid": True},
+            {"label": "wedge, in-phase", "force_n": 30.0, "error_pct": 7.0, "valid": False},
+        ]
+    }
+    a = answer(r)
+    sure = " ".join(a["sure"])
+    assert "1 failed (wedge-0deg-30N)" in sure and "lower bounds" in sure
+    assert "within 0.51 %" in sure and "1 of 2 peaks" in sure
+    # the failed wedge's peak is a lower bound wherever it is quoted
+    assert ">= " in a["sentences"][0]

@@ -186,12 +186,18 @@ def confidence(results: StudyResults, rows: dict[float, list[AnswerRow]]) -> lis
     errs = [r for r in nl.get("rows", []) if r.get("error_pct") is not None]
     if errs:
         ok = [r for r in errs if r.get("valid")]
-        worst = max((abs(r["error_pct"]) for r in ok), default=math.nan)
-        out.append(
-            f"Cross-check by nonlinear modes: the synthesised peaks (max |x(t)|) are within "
-            f"{num(worst, 2)} % of the curves' on the {len(ok)} of {len(errs)} peaks where the "
-            "synthesis is valid."
-        )
+        if ok:
+            worst = max(abs(r["error_pct"]) for r in ok)
+            out.append(
+                f"Cross-check by nonlinear modes: the synthesised peaks (max |x(t)|) are within "
+                f"{num(worst, 2)} % of the curves' on the {len(ok)} of {len(errs)} peaks where "
+                "the synthesis is valid."
+            )
+        else:
+            out.append(
+                f"Cross-check by nonlinear modes: the synthesis is flagged not valid at all "
+                f"{len(errs)} peaks; the curves are the answer."
+            )
     out.append(_not_varied(results.cases))
     return out
 
