@@ -24,7 +24,7 @@ def test_comparison_shows_file_values_with_their_source():
     assert all(r["value"] is not None for r in rows.values())
     # unset: the contact and geometry files' values, named
     assert rows["cf"]["value"] == 10000.0 and rows["cf"]["unit"] == "N"
-    assert rows["cf"]["source"] == "default: geometry/contact.toml"
+    assert rows["cf"]["source"] == "default: geometry/contact.toml [contact]"
     assert rows["kt-line"]["value"] == 6e10 and rows["kt-line"]["unit"] == "N/m per m"
     assert rows["mesh-size"]["value"] == 9.0 and "rig.toml" in rows["mesh-size"]["source"]
     assert rows["nt"]["value"] == 64 and "solver default" in rows["nt"]["source"]
@@ -68,7 +68,16 @@ def test_report_table_has_unit_and_source(tmp_path):
     s = load_study(ROOT / "studies/paper.toml")
     html = render_html({"title": "t", "inputs_used": used_inputs(s.as_dict(), s.source)}, tmp_path)
     assert "<th>unit</th>" in html and "<td>N/m per m</td>" in html
-    assert "<td>None</td>" not in html and "default: geometry/contact.toml" in html
+    assert "<td>None</td>" not in html and "default: geometry/contact.toml [contact]" in html
+
+
+def test_a_geometry_files_contact_table_is_the_contact_shown():
+    """Resolved without a solve (older manifests): the paper-like rig's own [contact]
+    table, not geometry/contact.toml (issue 33: the report stated mu 0.5 and CF 10 kN)."""
+    rows = _rows("studies/paper_rig.toml")
+    assert rows["mu"]["value"] == 0.3 and rows["cf"]["value"] == 13600.0
+    assert rows["kt-line"]["value"] == 4.0e10 and rows["kn-face"]["value"] == 9.15e11
+    assert rows["mu"]["source"] == "default: geometry/paper_rig.toml [contact]"
 
 
 def test_sweep_headline_names_the_case():

@@ -17,20 +17,33 @@ DOC = Path(__file__).resolve().parents[1] / "docs" / "RESULTS.md"
 
 def _datasets(h):
     out = {}
-    h.visititems(lambda n, o: out.setdefault(n, o) if isinstance(o, h5py.Dataset) else None)
+
+    def visit(name, obj):  # returns None: h5py's visititems stops at the first non-None
+        if isinstance(obj, h5py.Dataset):
+            out[name] = obj
+
+    h.visititems(visit)
     return out
 
 
 def test_every_results_dataset_has_a_documented_unit(tmp_path):
+    from tests.test_report_provenance import _geometry_copy, _study
+
     study = synthetic_study()
+    # a case as the runner writes it: with the inputs its solve used (case/inputs/...)
+    study.cases[0].inputs = _study(tmp_path, _geometry_copy(tmp_path))[1].cases[0].inputs
+    assert study.cases[0].inputs
     p = study.save(tmp_path / "results.h5")
     doc = DOC.read_text()
     with h5py.File(p, "r") as h:
         ds = _datasets(h)
         assert ds
+        assert any("/case/inputs/" in name for name in ds)
         for name, d in ds.items():
             assert "unit" in d.attrs, name
             leaf = name.split("/", 2)[2]  # cases/<case id>/<leaf>
+            if leaf.startswith("case/inputs/shape/"):  # one line for every shape parameter
+                leaf = "case/inputs/shape/<parameter>"
             assert f"`{leaf}`" in doc, f"{leaf} is not in docs/RESULTS.md"
         cid = study.cases[0].case_id
         assert h[f"cases/{cid}/friction_energy"].attrs["unit"] == "J"

@@ -9,7 +9,7 @@ value is the per-unit value times its tributary weight
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 
 import numpy as np
@@ -66,9 +66,32 @@ def load_contact_params(
     """Contact parameters, layered: geometry/contact.toml < the ``[contact]`` table of a
     rig file (``geometry_file``: a rig calibrated with its own contact) < ``path`` (a
     contact file) < ``overrides`` (None values ignored)."""
-    data: dict = dict(read_toml(DEFAULT_FILE).get("contact", {})) if DEFAULT_FILE.is_file() else {}
-    for source in (geometry_file, path):
-        if source is not None:
-            data.update(read_toml(source).get("contact", {}))
-    data.update({k: v for k, v in overrides.items() if v is not None})
+    data, _ = _layers(path, geometry_file, overrides)
     return load_record(ContactParams, data, "contact.")
+
+
+def contact_sources(
+    path: str | Path | None = None, *, geometry_file: str | Path | None = None, **overrides: float
+) -> dict[str, str]:
+    """Where each field of :func:`load_contact_params` (same arguments) comes from.
+
+    Field name -> "option" (an override), a file and its table
+    (``"<file> [contact]"``, the path as given) or "ContactParams default".
+    """
+    _, src = _layers(path, geometry_file, overrides)
+    return {f.name: src.get(f.name, "ContactParams default") for f in fields(ContactParams)}
+
+
+def _layers(path, geometry_file, overrides) -> tuple[dict, dict[str, str]]:
+    """The merged ``[contact]`` values and, per key, the layer that set it."""
+    data: dict = {}
+    src: dict[str, str] = {}
+    for source in (DEFAULT_FILE if DEFAULT_FILE.is_file() else None, geometry_file, path):
+        if source is not None:
+            table = read_toml(source).get("contact", {})
+            data.update(table)
+            src.update({k: f"{source} [contact]" for k in table})
+    given = {k: v for k, v in overrides.items() if v is not None}
+    data.update(given)
+    src.update({k: "option" for k in given})
+    return data, src

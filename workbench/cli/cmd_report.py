@@ -15,6 +15,14 @@ stage timings into one HTML file (figures embedded) that opens from disk.
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("dir", type=Path, metavar="DIR", help="a folder written by upd study")
+    p.add_argument(
+        "--screenshot",
+        type=Path,
+        metavar="PNG",
+        help="also write the report's first screen, as a 1280 x 900 browser window shows it "
+        "(headless chromium), to PNG, and check that the answer table and the headline "
+        "chart are on it",
+    )
 
 
 def run(args: argparse.Namespace, ctx) -> dict:
@@ -32,7 +40,22 @@ def run(args: argparse.Namespace, ctx) -> dict:
                 "DIR", str(args.dir), "a study folder you can write to (or give --out)", why
             )
     target = write_report(args.dir, (ctx.out_dir(".") / "report.html") if ctx.out else None)
-    return {"report": str(target), "bytes": target.stat().st_size}
+    out = {"report": str(target), "bytes": target.stat().st_size}
+    if args.screenshot is not None:
+        from ..render.browser import first_screen, screenshot
+
+        png = screenshot(target, args.screenshot)
+        fs = first_screen(target)
+        out["screenshot"] = str(png)
+        out["first_screen"] = {
+            "loaded": fs.loaded,
+            "page_area_px": list(fs.viewport),
+            "answer_table_on_screen": fs.on_screen("answer-table"),
+            "headline_chart_on_screen": fs.on_screen("headline-chart"),
+            "images": fs.images,
+            "broken_images": fs.broken_images,
+        }
+    return out
 
 
 REQUIRED = ("title", "sections")  # what every study writes and the report cannot do without

@@ -9,12 +9,14 @@ study's kind and dampers.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
 from ..geometry.shapes import all_shapes
 from ..geometry.shapes import get as get_shape
 from ..geometry.shapes import names as shape_names
+from .provenance import _rel_source, rel
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -107,12 +109,7 @@ KIND_OPTIONS: dict[str, tuple[str, ...]] = {
 }
 
 
-def _rel(p: Path | str) -> str:
-    p = Path(p)
-    try:
-        return str(p.resolve().relative_to(ROOT))
-    except ValueError:
-        return str(p)
+_rel = rel
 
 
 def _origin(source: str) -> str:
@@ -130,7 +127,7 @@ def used_inputs(
     ``values`` are the spec's options (``StudySpec.as_dict()``), ``sources``
     where each came from (``StudySpec.source``).
     """
-    from ..assembly.params import DEFAULT_FILE, ContactParams, load_contact_params
+    from ..assembly.params import ContactParams, contact_sources, load_contact_params
 
     sources = sources or {}
     kind = kind or values.get("kind", "comparison")
@@ -152,17 +149,21 @@ def used_inputs(
         if not any(option in sh.study_options for sh in shapes):
             skip |= {option, f"levels-{option}"}
 
-    contact_file = _rel(DEFAULT_FILE) if DEFAULT_FILE.is_file() else "ContactParams defaults"
-    cp: ContactParams = load_contact_params()
-    contact_default = {
-        "mu": cp.mu,
-        "cf": cp.cf_n,
-        "kt-line": cp.kt_line_n_per_m2,
-        "kn-line": cp.kn_line_n_per_m2,
-        "kt-face": cp.kt_face_n_per_m3,
-        "kn-face": cp.kn_face_n_per_m3,
-    }
     geo_file = values.get("geometry")
+    # the layers the runner loads (geometry/contact.toml < the geometry file's [contact])
+    cp: ContactParams = load_contact_params(geometry_file=geo_file)
+    csrc = contact_sources(geometry_file=geo_file)
+    contact_default = {
+        opt: (getattr(cp, f), f"default: {_rel_source(csrc[f])}")
+        for f, opt in (
+            ("mu", "mu"),
+            ("cf_n", "cf"),
+            ("kt_line_n_per_m2", "kt-line"),
+            ("kn_line_n_per_m2", "kn-line"),
+            ("kt_face_n_per_m3", "kt-face"),
+            ("kn_face_n_per_m3", "kn-face"),
+        )
+    }
     sweep = values.get("sweep") if kind == "sweep" else None
 
     shape_options = {o for sh in all_shapes() for o in sh.study_options}
@@ -176,7 +177,7 @@ def used_inputs(
             v = values.get("sweep-values")
             src = f"swept ({_origin(sources.get('sweep-values', 'default'))})"
         elif v is None and name in contact_default:
-            v, src = contact_default[name], f"default: {contact_file}"
+            v, src = contact_default[name]
         elif v is None and (name == "mesh-size" or name in shape_options):
             v, src = _geometry_default(name, dampers, geo_file)
         elif v is None and name == "nt":
@@ -213,3 +214,160 @@ def _geometry_default(name: str, dampers: list[str], geo_file: Any) -> tuple[Any
     if len(uniq) == 1:
         return uniq.pop(), src
     return ", ".join(f"{d} {v:g}" for d, v in vals.items()), src
+
+
+# ---- the report's table: the study's options and what the solve recorded ----------------
+
+# a recorded input -> the study option that sets it (its "option" source is named by the spec)
+OPTION_OF = {
+    "mu": "mu",
+    "cf": "cf",
+    "kt_line": "kt-line",
+    "kn_line": "kn-line",
+    "kt_face": "kt-face",
+    "kn_face": "kn-face",
+    "mesh_size": "mesh-size",
+    "modes": "modes",
+    "rigid_damper": "rigid-damper",
+    "damping": "damping",
+    "harmonics": "harmonics",
+    "nt": "nt",
+    "band": "band-in-phase",
+    "response": "response-blade",
+    "geometry_files": "geometry",
+    "solver_options": "max-points",
+}
+# study options whose values the solve records (they leave the study part of the table)
+RECORDED_OPTIONS = set(OPTION_OF.values()) | {
+    "band-out-of-phase",
+    "points-per-line",
+    "cone-angle",
+}
+MAX_LISTED = 4  # more distinct values than this: the range, and where to find each
+
+
+def _option_of(key: str, damper: str) -> str | None:
+    if key.startswith("shape/") and damper in shape_names():
+        field = key.split("/", 1)[1]
+        return next(
+            (o for o, (f, _) in get_shape(damper).study_options.items() if f == field), None
+        )
+    return OPTION_OF.get(key)
+
+
+def study_inputs(
+    cases: list[Any], values: dict[str, Any], sources: dict[str, str] | None = None
+) -> list[dict[str, Any]]:
+    """The report's Inputs rows: the study's own options, then every input the solve of
+    its cases recorded (``CaseResult.inputs``), grouped (``group``: Study, Contact, Model,
+    Damping, Harmonic balance, Code).
+
+    An input that differs between cases (a sweep, the dampers' own stiffnesses) is
+    listed per case label (``damper [variant]``). Cases solved before the inputs were
+    recorded fall back to :func:`used_inputs` (resolved again from the files).
+    """
+    from .provenance import GROUPS
+
+    sources = sources or {}
+    recorded = [c for c in cases if getattr(c, "inputs", None)]
+    base = used_inputs(values, sources)
+    if not recorded:
+        return [dict(r, group="Study and model (resolved again from the files)") for r in base]
+    rows = [dict(r, group="Study") for r in base if r["option"] not in RECORDED_OPTIONS]
+    keys = list(dict.fromkeys(k for c in recorded for k in c.inputs))
+    dampers = list(dict.fromkeys(c.damper for c in recorded))
+    for group in GROUPS:
+        if group == "run":  # the machine's load: the report's cost section says it
+            continue
+        for key in keys:
+            per = [(c, c.inputs[key]) for c in recorded if key in c.inputs]
+            if not per or per[0][1].get("group") != group:
+                continue
+            rows.append(_merged_row(key, per, sources, GROUPS[group], dampers))
+    missing = [c.case_id for c in cases if not getattr(c, "inputs", None)]
+    if missing:
+        rows.append(
+            {
+                "option": "cases without a record",
+                "value": ", ".join(missing),
+                "unit": "",
+                "source": "solved by an earlier version; their inputs are not in this table",
+                "group": "Study",
+            }
+        )
+    return rows
+
+
+def _label(c: Any, family: bool = False) -> str:
+    return c.damper + (f" [{c.variant}]" if c.variant else "") + (f", {c.family}" if family else "")
+
+
+def _merged_row(
+    key: str, per: list, sources: dict[str, str], group: str, dampers: list[str]
+) -> dict[str, Any]:
+    first = per[0][1]
+
+    def src(c: Any, e: dict) -> str:
+        s = e.get("source", "")
+        if s == "option":
+            opt = _option_of(key, c.damper)
+            return _origin(sources.get(opt, "default")) if opt else "study option"
+        return s
+
+    by_value: dict[str, list] = {}
+    for c, e in per:
+        by_value.setdefault(json.dumps(e["value"], sort_keys=True, default=str), []).append((c, e))
+    label = f"{first.get('label', key)} ({key})"
+    if key == "solver_options":  # JSON in the files; "name = value" for a reader
+        per = [(c, {**e, "value": _options_text(e["value"])}) for c, e in per]
+        first = per[0][1]
+    if len(by_value) == 1:
+        value = first["value"]
+        srcs = list(dict.fromkeys(src(c, e) for c, e in per))
+        names = list(dict.fromkeys(c.damper for c, _ in per))
+        who = "" if names == dampers else " (" + ", ".join(names) + ")"
+        return {
+            "option": label + who,
+            "value": value,
+            "unit": first.get("unit", ""),
+            "source": "; ".join(srcs),
+            "group": group,
+        }
+    groups = list(by_value.values())
+    if len(groups) > MAX_LISTED and all(isinstance(g[0][1]["value"], (int, float)) for g in groups):
+        vs = sorted(float(g[0][1]["value"]) for g in groups)
+        value: Any = f"{len(groups)} values, {vs[0]:.4g} to {vs[-1]:.4g}"
+    else:
+        parts = []
+        # a value of each case (the band): name the family too
+        per_case = len({_label(c) for c, _ in per}) < len(per)
+        for g in groups:
+            who = ", ".join(dict.fromkeys(_label(c, per_case) for c, _ in g))
+            parts.append(f"{who}: {_short(g[0][1]['value'])}")
+        value = "; ".join(parts)
+    srcs = list(dict.fromkeys(src(c, e) for c, e in per))
+    return {
+        "option": label,
+        "value": value,
+        "unit": first.get("unit", ""),
+        "source": "; ".join(srcs),
+        "group": group,
+    }
+
+
+def _options_text(text: str) -> str:
+    try:
+        opts = json.loads(text)
+    except (TypeError, ValueError):
+        return str(text)
+    return "; ".join(f"{k} = {_short(v)}" for k, v in opts.items())
+
+
+def _short(v: Any) -> str:
+    from .tables import num
+
+    if isinstance(v, float):
+        return num(v, 4)
+    if isinstance(v, list):
+        return ", ".join(_short(x) for x in v)
+    return str(v)

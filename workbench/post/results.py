@@ -65,6 +65,8 @@ class CaseResult:
     digest: str = ""
     timings: dict[str, float] = field(default_factory=dict)  # stage -> s (incl. shared stages)
     output: int = 0  # index of the reported output in the branch
+    # every input the solve used: key -> {value, unit, source, label, group} (post/provenance.py)
+    inputs: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     @property
     def case_id(self) -> str:
@@ -81,12 +83,48 @@ class CaseResult:
 
     @property
     def amp_mm(self) -> np.ndarray:
-        """Largest response displacement over the period at each point, mm."""
+        """Largest response displacement over the period at each point, max |x(t)|, mm
+        (the mean term included)."""
         return self.branch.out_amp[:, self.output] * 1e3
 
     @property
     def receptance_mm_per_n(self) -> np.ndarray:
+        """max |x(t)| / F at each point, mm/N."""
         return self.amp_mm / self.force_n
+
+    @property
+    def h1_mm(self) -> np.ndarray:
+        """Harmonic-1 amplitude of the response at each point, mm: the vibration, without
+        the mean term and the higher harmonics (the report's amplitude)."""
+        return self.branch.out_h1[:, self.output] * 1e3
+
+    @property
+    def h1_receptance_mm_per_n(self) -> np.ndarray:
+        """Harmonic-1 amplitude / F at each point, mm/N."""
+        return self.h1_mm / self.force_n
+
+    @property
+    def mean_mm(self) -> np.ndarray:
+        """The mean term (harmonic 0) of the response at each point, mm (0 when the balance
+        has no harmonic 0)."""
+        b = self.branch
+        row = 0
+        for h in b.harmonics:
+            if h == 0:
+                return np.asarray(b.out_harm)[:, row, self.output] * 1e3
+            row += 2
+        return np.zeros(b.n_points)
+
+    @property
+    def h1_peak_index(self) -> int:
+        """Index of the point of largest harmonic-1 amplitude (-1 without points)."""
+        return int(np.argmax(self.h1_mm)) if self.branch.n_points else -1
+
+    @property
+    def h1_peak_covered(self) -> bool:
+        """True when the harmonic-1 peak lies strictly inside a curve that completed."""
+        j, n = self.h1_peak_index, self.branch.n_points
+        return bool(self.branch.completed and not self.branch.failed and 0 < j < n - 1)
 
     @property
     def stable(self) -> np.ndarray:
@@ -137,8 +175,9 @@ class CaseResult:
         return self.branch.friction_energy * 1e3
 
     def status_shares(self, i: int | None = None) -> dict[str, float]:
-        """Fraction of pairs in each status at point ``i`` (default: the resonance peak)."""
-        i = self.peak_index if i is None else i
+        """Fraction of pairs in each status at point ``i`` (default: the resonance, the
+        harmonic-1 peak)."""
+        i = self.h1_peak_index if i is None else i
         if i < 0:
             return {k: float("nan") for k in STATUS_KEYS}
         counts = np.bincount(self.branch.status[i].astype(int), minlength=4)[:4]
@@ -164,6 +203,7 @@ class CaseResult:
             **self._energy_at(i),
             "peak_stable": bool(self.stable[i]) if ok else None,
             "n_points": self.branch.n_points,
+            "n_stable": int(np.sum(self.branch.stability == 1)),
             "n_unstable": int(np.sum(self.branch.unstable)),
             "n_stability_unknown": int(np.sum(self.branch.unknown)),
             "energy_residual_max": float(np.max(self.branch.energy_residual)) if ok else None,
@@ -197,21 +237,35 @@ class CaseResult:
         }
 
     def _h1_peak(self) -> dict[str, Any]:
-        b = self.branch.summary(self.output)
-        a = b.get("h1_amplitude")
+        """The harmonic-1 peak and, at that same point, max |x(t)|, the mean term, the
+        friction energy and the stability verdict (None where there is no point)."""
+        j = self.h1_peak_index
+        if j < 0:
+            keys = ("amplitude_mm", "peak_frequency_hz", "max_abs_mm", "mean_mm")
+            keys += ("friction_energy_mj", "friction_energy_note", "peak_stability")
+            return {f"h1_{k}": None for k in keys}
+        e = self._energy_at(j)
         return {
-            "h1_amplitude_mm": None if a is None else float(a) * 1e3,
-            "h1_peak_frequency_hz": b.get("h1_peak_frequency_hz"),
+            "h1_amplitude_mm": float(self.h1_mm[j]),
+            "h1_peak_frequency_hz": float(self.freq_hz[j]),
+            "h1_max_abs_mm": float(self.amp_mm[j]),
+            "h1_mean_mm": float(self.mean_mm[j]),
+            "h1_friction_energy_mj": e["friction_energy_mj"],
+            "h1_friction_energy_note": e["friction_energy_note"],
+            "h1_peak_stability": self.branch.stability_name(j),
         }
 
     def _peak_bound(self) -> dict[str, Any]:
         """Summary keys saying whether the peak was reached; a peak the curve did not reach
         is never reported as one: its values are None and its amplitude a lower bound."""
         i, covered = self.peak_index, self.peak_covered
+        j = self.h1_peak_index
         out: dict[str, Any] = {
             "peak_covered": covered,
             "peak_lower_bound_mm": None,
             "peak_note": self.peak_note(),
+            "h1_peak_covered": self.h1_peak_covered,
+            "h1_lower_bound_mm": None,
         }
         if not covered and i >= 0:
             out["peak_lower_bound_mm"] = float(self.amp_mm[i])
@@ -222,10 +276,14 @@ class CaseResult:
                 "friction_energy_note",
                 "peak_stable",
                 "peak_stability",
-                "h1_amplitude_mm",
-                "h1_peak_frequency_hz",
             ):
                 out[k] = None
+        if not self.h1_peak_covered and j >= 0:
+            out["h1_lower_bound_mm"] = float(self.h1_mm[j])
+            for k in ("amplitude_mm", "peak_frequency_hz", "max_abs_mm", "mean_mm"):
+                out[f"h1_{k}"] = None
+            for k in ("friction_energy_mj", "friction_energy_note", "peak_stability"):
+                out[f"h1_{k}"] = None
         return out
 
     # ---- storage
@@ -248,6 +306,10 @@ class CaseResult:
                 a["variant"], a["digest"], a["output"] = self.variant, self.digest, self.output
                 a["params"] = json.dumps(self.params, default=str, sort_keys=True)
                 a["timings"] = json.dumps(self.timings)
+                if self.inputs:
+                    from .provenance import save_inputs
+
+                    save_inputs(g.create_group("inputs"), self.inputs)
                 from .units import BRANCH_UNITS, CASE_UNITS, annotate
 
                 annotate(h, {**BRANCH_UNITS, **CASE_UNITS})
@@ -273,6 +335,7 @@ class CaseResult:
                 output=int(a["output"]),
                 params=json.loads(a["params"]),
                 timings=json.loads(a["timings"]),
+                inputs=_inputs_of(g),
             )
 
 
@@ -377,6 +440,14 @@ class StudyResults:
                 extras=json.loads(a["extras"]),
                 timings=json.loads(a["timings"]),
             )
+
+
+def _inputs_of(group: Any) -> dict[str, dict[str, Any]]:
+    if "inputs" not in group:  # a case solved before the inputs were recorded
+        return {}
+    from .provenance import load_inputs
+
+    return load_inputs(group["inputs"])
 
 
 def _np_default(o: Any) -> Any:

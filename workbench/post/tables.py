@@ -75,8 +75,9 @@ def sci(value: float, digits: int = 2) -> str:
 
 ENERGY_FLOOR_REL = 1e-6
 """Energies below this fraction of the largest one in a table or figure are round-off of a
-stuck (or rolling) contact: they are shown and printed as "stuck / 0", never as numbers."""
-STUCK_TEXT = "stuck / 0"
+contact that does not slip (stuck, rolling or open): they are written as words
+(:data:`STUCK_TEXT`), never as numbers."""
+STUCK_TEXT = "zero (no slip)"
 
 
 def energy_floor(values: Sequence[float] | np.ndarray, rel: float = ENERGY_FLOOR_REL) -> float:
@@ -87,20 +88,34 @@ def energy_floor(values: Sequence[float] | np.ndarray, rel: float = ENERGY_FLOOR
     return rel * top
 
 
-def energy_text(value: float, floor: float, digits: int = 2) -> str:
-    """An energy for a table: ``sci`` above the floor, "stuck / 0" at or below it (or negative)."""
+def fixed(value: float, digits: int = 4) -> str:
+    """A number with ``digits`` significant digits (``n/a`` for NaN, never ``-0``)."""
     v = float(value)
     if math.isnan(v):
         return "n/a"
-    if v <= floor or v <= 0.0:
-        return STUCK_TEXT
-    return sci(v, digits)
+    out = f"{v:.{digits}g}"
+    return out[1:] if out.startswith("-") and float(out) == 0.0 else out
 
 
-def fixed(value: float, digits: int = 4) -> str:
-    """A number with ``digits`` significant digits (``n/a`` for NaN)."""
+def num(value: Any, digits: int = 4) -> str:
+    """A number for a report table: ``digits`` significant digits in plain notation from
+    1e-3 to 1e5 (``0.1843``, ``383.9``, ``13600``), the paper's ``4e10`` notation outside
+    (trailing zeros dropped), ``0`` for zero (never ``-0``), ``n/a`` for None or NaN."""
+    if value is None:
+        return "n/a"
     v = float(value)
-    return "n/a" if math.isnan(v) else f"{v:.{digits}g}"
+    if math.isnan(v):
+        return "n/a"
+    if v == 0.0 or abs(v) < 1e-300:
+        return "0"
+    if 1e-3 <= abs(v) < 1e5:
+        out = f"{v:.{digits}g}"
+        if "e" in out:  # 4 digits of a number >= 1e4: write it out
+            out = f"{v:.0f}"
+        return out
+    mant, exp = f"{v:.{max(digits - 1, 0)}e}".split("e")
+    mant = mant.rstrip("0").rstrip(".") if "." in mant else mant
+    return f"{mant}e{int(exp)}"
 
 
 def slug(text: str) -> str:
@@ -181,16 +196,24 @@ def stability_runs(stable: np.ndarray) -> list[tuple[slice, bool]]:
 
 @dataclass(frozen=True)
 class PeakCurve:
-    """Resonance values of one curve set vs force (NaN where a branch has no point)."""
+    """Resonance values of one curve set vs force (NaN where a branch has no point).
+
+    The resonance of a curve is its largest harmonic-1 amplitude (the
+    vibration); the other values are taken at that same point.
+    """
 
     damper: str
     phase_deg: float
     force_n: np.ndarray
-    amp_mm: np.ndarray  # largest response amplitude of each branch
+    amp_mm: np.ndarray  # largest harmonic-1 amplitude of each branch
     freq_hz: np.ndarray  # its frequency
     energy_mj: np.ndarray  # friction energy per cycle, all pairs, at that point
     stable: np.ndarray  # bool, that point is stable
     failed: np.ndarray  # bool, the branch stopped on a failure
+    verdict: np.ndarray | None = None  # stability code at that point (1, 0, -1, ...)
+    max_abs_mm: np.ndarray | None = None  # max |x(t)| at that point
+    mean_mm: np.ndarray | None = None  # mean term at that point
+    covered: np.ndarray | None = None  # bool, the curve went over that peak
 
     @property
     def family(self) -> str:
@@ -198,24 +221,40 @@ class PeakCurve:
 
 
 def _at_peak(case: CaseResult) -> tuple[float, float, float, bool]:
-    i = case.peak_index
+    """(harmonic-1 amplitude mm, frequency Hz, friction energy mJ, stable) at the
+    harmonic-1 peak."""
+    i = case.h1_peak_index
     if i < 0:
         return (math.nan,) * 3 + (False,)
     return (
-        float(case.amp_mm[i]),
+        float(case.h1_mm[i]),
         float(case.freq_hz[i]),
         float(case.energy_mj[i].sum()),
         bool(case.stable[i]),
     )
 
 
+def _peak_extra(case: CaseResult) -> tuple[int, float, float, bool]:
+    """(stability code, max |x(t)| mm, mean mm, covered) at the harmonic-1 peak."""
+    i = case.h1_peak_index
+    if i < 0:
+        return (-1, math.nan, math.nan, False)
+    return (
+        int(case.branch.stability[i]),
+        float(case.amp_mm[i]),
+        float(case.mean_mm[i]),
+        case.h1_peak_covered,
+    )
+
+
 def peak_curve(cases: Sequence[CaseResult]) -> PeakCurve:
-    """Peak amplitude, frequency and friction energy vs force for one curve set."""
+    """Harmonic-1 peak amplitude, frequency and friction energy vs force, one curve set."""
     if not cases:
         raise InputError("cases", "[]", "at least one case of one damper and one family")
     cases = sorted(cases, key=lambda c: c.force_n)
     _check_one_set(cases)
     vals = [_at_peak(c) for c in cases]
+    extra = [_peak_extra(c) for c in cases]
     return PeakCurve(
         damper=cases[0].damper,
         phase_deg=cases[0].phase_deg,
@@ -225,6 +264,10 @@ def peak_curve(cases: Sequence[CaseResult]) -> PeakCurve:
         energy_mj=np.array([v[2] for v in vals]),
         stable=np.array([v[3] for v in vals]),
         failed=np.array([bool(c.branch.failed) for c in cases]),
+        verdict=np.array([e[0] for e in extra], dtype=int),
+        max_abs_mm=np.array([e[1] for e in extra]),
+        mean_mm=np.array([e[2] for e in extra]),
+        covered=np.array([e[3] for e in extra], dtype=bool),
     )
 
 
@@ -239,7 +282,7 @@ def status_share_curves(cases: Sequence[CaseResult]) -> tuple[np.ndarray, dict[s
     cases = sorted(cases, key=lambda c: c.force_n)
     _check_one_set(cases)
     forces = np.array([c.force_n for c in cases])
-    shares = [c.status_shares() for c in cases]
+    shares = [c.status_shares(c.h1_peak_index) for c in cases]
     return forces, {k: np.array([s[k] for s in shares]) for k in STATUS_KEYS}
 
 
@@ -272,6 +315,7 @@ class SweepCurve:
     energy_mj: np.ndarray
     stable: np.ndarray
     failed: np.ndarray
+    verdict: np.ndarray | None = None  # stability code at each peak (1, 0, -1, ...)
 
     @property
     def family(self) -> str:
@@ -298,6 +342,7 @@ def sweep_curve(cases: Iterable[CaseResult], option: str) -> SweepCurve:
         energy_mj=np.array([v[2] for v in vals]),
         stable=np.array([v[3] for v in vals]),
         failed=np.array([bool(c.branch.failed) for c in cases]),
+        verdict=np.array([_peak_extra(c)[0] for c in cases], dtype=int),
     )
 
 
@@ -395,6 +440,8 @@ def _force_table(
             cell = fmt(value(c)) if c is not None else ""
             if c is not None and c.branch.failed:
                 cell += " (failed)"  # the value of a branch that stopped early
+            elif c is not None and not c.h1_peak_covered and c.h1_peak_index >= 0:
+                cell += " (peak not reached)"
             row.append(cell)
         rows.append(tuple(row))
     return Table((corner, *(f"{f:g} N" for f in forces)), tuple(rows))
@@ -403,31 +450,43 @@ def _force_table(
 def energy_table(results: StudyResults, phase_deg: float, variant: str | None = None) -> Table:
     """Friction energy per cycle at resonance, mJ: dampers x forces (paper Tables 1-2).
 
-    Energies below :data:`ENERGY_FLOOR_REL` times the table's largest read
-    "stuck / 0" (round-off of a contact that does not slip).
+    At the harmonic-1 peak. Energies below :data:`ENERGY_FLOOR_REL` times the
+    table's largest are written :data:`STUCK_TEXT` (round-off of a contact
+    that does not slip).
     """
     cases = [c for c in results.select(phase_deg=phase_deg, variant=variant)]
     floor = energy_floor([_at_peak(c)[2] for c in cases])
     return _force_table(
         results,
         phase_deg,
-        "energy per cycle (mJ) at force",
+        "damper: friction energy per cycle (mJ) at force",
         lambda c: _at_peak(c)[2],
         lambda v: energy_text(v, floor),
         variant,
     )
 
 
+def energy_text(value: float, floor: float, digits: int = 3) -> str:
+    """An energy for a table: ``digits`` significant digits above the floor,
+    :data:`STUCK_TEXT` at or below it (or negative)."""
+    v = float(value)
+    if math.isnan(v):
+        return "n/a"
+    if v <= floor or v <= 0.0:
+        return STUCK_TEXT
+    return num(v, digits)
+
+
 def peak_amplitude_table(
     results: StudyResults, phase_deg: float, variant: str | None = None
 ) -> Table:
-    """Largest response amplitude, mm: dampers x forces."""
+    """Harmonic-1 peak amplitude, mm: dampers x forces."""
     return _force_table(
         results,
         phase_deg,
-        "peak amplitude (mm) at force",
+        "damper: vibration amplitude, harmonic 1 (mm) at force",
         lambda c: _at_peak(c)[0],
-        lambda v: fixed(v, 4),
+        lambda v: num(v, 4),
         variant,
     )
 
@@ -435,11 +494,11 @@ def peak_amplitude_table(
 def peak_frequency_table(
     results: StudyResults, phase_deg: float, variant: str | None = None
 ) -> Table:
-    """Frequency of the largest response, Hz: dampers x forces."""
+    """Frequency of the harmonic-1 peak, Hz: dampers x forces."""
     return _force_table(
         results,
         phase_deg,
-        "resonance frequency (Hz) at force",
+        "damper: resonance frequency (Hz) at force",
         lambda c: _at_peak(c)[1],
         lambda v: fixed(v, 5),
         variant,
@@ -449,73 +508,37 @@ def peak_frequency_table(
 def status_shares_table(
     results: StudyResults, phase_deg: float, variant: str | None = None
 ) -> Table:
-    """Share of the pairs in each status at resonance, percent: one row per damper and force."""
+    """Share of the pairs in each status at resonance (the harmonic-1 peak), percent: one
+    row per damper and force."""
     rows = []
     for d in results.dampers:
         for c in curve_set(results, d, phase_deg, variant):
-            s = c.status_shares()
-            rows.append((d, f"{c.force_n:g}", *(fixed(100.0 * s[k], 3) for k in STATUS_KEYS)))
+            s = c.status_shares(c.h1_peak_index)
+            rows.append((d, f"{c.force_n:g}", *(_share(100.0 * s[k]) for k in STATUS_KEYS)))
     return Table(("damper", "force (N)", *(f"{n} (%)" for n in STATUS_NAMES)), tuple(rows))
 
 
+def _share(pct: float) -> str:
+    if math.isnan(pct):
+        return "n/a"
+    return "none" if pct == 0.0 else ("all" if pct == 100.0 else num(pct, 3))
+
+
 def cases_table(results: StudyResults) -> Table:
-    """One row per case: peak, energy, stability, shares, cost, completion (full precision)."""
-    header = (
-        "case",
-        "damper",
-        "family",
-        "force (N)",
-        "variant",
-        "peak frequency (Hz)",
-        "peak amplitude (mm)",
-        "receptance (mm/N)",
-        "friction energy (mJ)",
-        "peak stable",
-        "points",
-        "unstable points",
-        "completed",
-        "wall time (s)",
-        "message",
-    )
-    rows = []
-    for c in results.cases:
-        s = c.summary()
-        amp = s["peak_amplitude_mm"]
-        rows.append(
-            (
-                c.case_id,
-                c.damper,
-                c.family,
-                f"{c.force_n:g}",
-                c.variant,
-                fixed(_nan(s["peak_frequency_hz"]), 7),
-                fixed(_nan(amp), 6),
-                fixed(_nan(amp) / c.force_n, 6),
-                sci(_nan(s["friction_energy_mj"]), 4),
-                _stability_cell(s),
-                str(s["n_points"]),
-                str(s["n_unstable"]),
-                "yes" if s["completed"] else ("failed" if c.branch.failed else "no"),
-                f"{s['wall_s']:.3g}",
-                s["message"],
-            )
-        )
-    for k, c in enumerate(results.cases):  # a peak the curve did not reach: a lower bound
-        low = c.summary()["peak_lower_bound_mm"]
-        if low is not None:
-            r = list(rows[k])
-            r[6], r[7] = f">= {fixed(low, 6)} (peak not reached)", f">= {fixed(low / c.force_n, 6)}"
-            r[12] += ", peak not reached"
-            rows[k] = tuple(r)
-    return Table(header, tuple(rows))
+    """One row per case (:func:`workbench.post.answer.cases_table`)."""
+    from .answer import cases_table as table
+
+    return table(results)
 
 
 def sweep_table(curves: Sequence[SweepCurve]) -> Table:
-    """Long table of a sweep: damper, family, force, value, peak frequency, amplitude, energy."""
+    """Long table of a sweep: damper, family, force, value, resonance, harmonic-1 amplitude,
+    energy, stability at the peak."""
     if not curves:
         return Table(("damper",), ())
     opt = curves[0].option
     rows = []
+    floor = energy_floor(np.concatenate([sc.energy_mj for sc in curves]))
     for sc in curves:
         for k in range(sc.value.size):
             rows.append(
@@ -524,10 +547,10 @@ def sweep_table(curves: Sequence[SweepCurve]) -> Table:
                     sc.family,
                     f"{sc.force_n:g}",
                     f"{sc.value[k]:g}",
-                    fixed(sc.freq_hz[k], 6),
-                    fixed(sc.amp_mm[k], 5),
-                    sci(sc.energy_mj[k], 3),
-                    "failed" if sc.failed[k] else ("yes" if sc.stable[k] else "no"),
+                    fixed(sc.freq_hz[k], 5),
+                    num(sc.amp_mm[k], 4),
+                    energy_text(sc.energy_mj[k], floor),
+                    "failed" if sc.failed[k] else _verdict_word(sc, k),
                 )
             )
     return Table(
@@ -536,21 +559,21 @@ def sweep_table(curves: Sequence[SweepCurve]) -> Table:
             "family",
             "force (N)",
             opt,
-            "peak frequency (Hz)",
-            "peak amplitude (mm)",
-            "friction energy (mJ)",
-            "peak stable",
+            "resonance (Hz)",
+            "vibration amplitude, harmonic 1 (mm)",
+            "friction energy per cycle (mJ)",
+            "stability at the peak",
         ),
         tuple(rows),
     )
 
 
-def _stability_cell(s: dict) -> str:
-    """yes / no / unknown (Hill not computed or not trusted) for the peak point."""
-    v = s.get("peak_stability")
-    if v is not None:
-        return {"stable": "yes", "unstable": "no"}.get(v, "unknown")
-    return "" if s["peak_stable"] is None else ("yes" if s["peak_stable"] else "no")
+def _verdict_word(sc: SweepCurve, k: int) -> str:
+    from ..render.palette import verdict_label
+
+    if sc.verdict is None:
+        return "stable" if sc.stable[k] else "not stable"
+    return verdict_label(int(sc.verdict[k]))
 
 
 def _nan(v: Any) -> float:

@@ -7,13 +7,14 @@ translucent:
 
 * ``*_status.png``: every contact pair as a sphere at its contact point,
   coloured by its status over the period (stuck, stick-slip, partial or
-  full separation; the colours of :data:`~.study_figures.STATUS_COLORS`, so
-  the 3-D maps and the status charts agree), with the count of each;
+  full separation; the colours of :data:`.palette.STATUS_COLORS`, so the
+  3-D maps and the status charts agree), with the count of each; the
+  damper's surface in the damper's own colour;
 * ``*_energy.png``: the same spheres coloured by the friction energy per
   cycle of each pair in mJ, on a log colour scale when the values span
   more than two decades. Pairs at or below the energy floor (1e-6 of the
-  largest, :data:`workbench.post.tables.ENERGY_FLOOR_REL`) are grey and
-  counted as "stuck / 0". A study draws all its maps on one colour scale
+  largest, :data:`workbench.post.tables.ENERGY_FLOOR_REL`) are light grey
+  and counted as "zero (no slip)". A study draws all its maps on one colour scale
   (:func:`energy_scale` over every mapped case), so in-phase and
   out-of-phase maps, and the dampers, compare by colour.
 
@@ -34,12 +35,10 @@ from ..errors import InputError
 from ..io import atomic_path
 from ..post.results import STATUS_NAMES, CaseResult
 from .common import offscreen_pyvista
-from .study_style import STATUS_COLORS
+from .palette import ENERGY_CMAP, STATUS_COLORS, ZERO_ENERGY_COLOR, damper_color
 
 log = logging.getLogger(__name__)
 
-DAMPER_SURFACE_COLOR = "#e8912d"
-ENERGY_CMAP = "viridis"
 LOG_FLOOR = 1e-6  # log colour scale: values below this fraction of the largest sit at the floor
 WINDOW = (1300, 1000)
 
@@ -101,7 +100,7 @@ def _screenshot(p, png: Path) -> Path:
     return png
 
 
-STUCK_COLOR = "#9e9e9e"
+STUCK_COLOR = ZERO_ENERGY_COLOR  # a pair that dissipates nothing (kept importable)
 
 
 def energy_scale(energies) -> tuple[float, float, bool]:
@@ -126,11 +125,11 @@ def energy_scale(energies) -> tuple[float, float, bool]:
 
 def _heading(case: CaseResult, i: int) -> str:
     f = case.freq_hz[i]
-    what = "resonance" if i == case.peak_index else f"point {i}"
+    what = "resonance" if i == case.h1_peak_index else f"point {i}"
     fail = "  (branch failed)" if case.branch.failed else ""
     return (
         f"{case.damper}, {case.family}, F = {case.force_n:g} N: {what} at {f:.1f} Hz, "
-        f"amplitude {case.amp_mm[i]:.3g} mm{fail}"
+        f"vibration amplitude (harmonic 1) {case.h1_mm[i]:.3g} mm{fail}"
     )
 
 
@@ -145,13 +144,13 @@ def render_contact_maps(
     """Write ``<out_stem>_status.png`` and ``<out_stem>_energy.png``; return both paths.
 
     ``geometry_dir`` holds the damper's ``damper.msh``; ``point`` is the
-    index on the case's branch (default: its resonance peak); ``scale`` the
+    index on the case's branch (default: its resonance, the harmonic-1 peak); ``scale`` the
     energy colour range (:func:`energy_scale`; default: this case's own).
     """
     pv = offscreen_pyvista()
     geometry_dir = Path(geometry_dir)
     n_pts = case.branch.n_points
-    i = case.peak_index if point is None else int(point)
+    i = case.h1_peak_index if point is None else int(point)
     if n_pts == 0 or not 0 <= i < n_pts:
         raise InputError("point", point, f"an index of the case's branch (0..{n_pts - 1})")
     pts = np.asarray(case.points, dtype=float)
@@ -167,9 +166,10 @@ def render_contact_maps(
     heading = _heading(case, i)
     side = np.asarray(case.side, dtype=int)
 
-    def base() -> object:
+    def base(opacity: float = 0.3) -> object:
+        # the damper in its own colour; fainter under the energy colours
         p = pv.Plotter(off_screen=True, window_size=WINDOW)
-        p.add_mesh(surface, color=DAMPER_SURFACE_COLOR, opacity=0.35, **look)
+        p.add_mesh(surface, color=damper_color(case.damper), opacity=opacity, **look)
         p.add_text(heading, font_size=11, position="upper_edge")
         # label the first pair of each side, so the numbering of the status charts can be found
         for s in (0, 1):
@@ -208,7 +208,7 @@ def render_contact_maps(
     # energy: pairs above the floor coloured on the (shared) scale, the others grey
     from ..post.tables import ENERGY_FLOOR_REL, STUCK_TEXT
 
-    p = base()
+    p = base(0.15)
     lo, hi, log_scale = scale if scale is not None else energy_scale([energy])
     floor = ENERGY_FLOOR_REL * hi if hi > 0 else 0.0
     slip = np.isfinite(energy) & (energy > floor)

@@ -1,9 +1,10 @@
 """Frequency response curves of the harmonic balance (matplotlib, no pyplot state).
 
 :func:`plot_frf` draws one curve per excitation level (stable parts solid,
-unstable parts dashed, parts of unknown stability dotted grey, the peak
-marked); :func:`plot_status_map` draws the contact status of every element
-along a branch (frequency on x, element on y), in the manner of the
+unstable parts dashed, parts of unknown stability dotted, as
+:data:`workbench.render.palette.VERDICTS` draws them; the peak marked);
+:func:`plot_status_map` draws the contact status of every element along a
+branch (frequency on x, element on y), in the manner of the
 contact-status charts of "On the efficiency of a conical under-platform
 damper for turbines". Both take branches
 (:class:`workbench.hbm.Branch`) and write a PNG.
@@ -17,19 +18,17 @@ from pathlib import Path
 import numpy as np
 
 from .common import pyplot, readable_log, save_figure, styled
+from .palette import (
+    STATUS_COLORS,
+    STATUS_NAMES,
+    marker_kwargs,
+    verdict,
+    verdict_counts,
+    verdict_legend,
+    verdict_runs,
+)
 
-STATUS_COLORS = ("#2b6cb0", "#d9822b", "#7cb342", "#9e9e9e")
-STATUS_LABELS = ("stuck", "stick-slip", "partial separation", "full separation")
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(start, stop) index ranges of equal values in an array (stop exclusive)."""
-    if mask.size == 0:
-        return []
-    edges = np.flatnonzero(np.diff(mask.astype(int))) + 1
-    starts = np.concatenate([[0], edges])
-    stops = np.concatenate([edges, [mask.size]])
-    return list(zip(starts, stops, strict=True))
+STATUS_LABELS = STATUS_NAMES
 
 
 @styled
@@ -67,48 +66,41 @@ def plot_frf(
         a = b.out_amp[:, output] * unit_scale / (force if per_level and force else 1.0)
         label = f"F = {force:.3g} N" + (" (failed)" if b.failed else "")
         first = True
-        verdict = np.asarray(b.stability)
-        for s, e in _runs(verdict):
-            seg = slice(max(s - 1, 0), e)  # join the segments
-            v = int(verdict[s])
+        for seg, code in verdict_runs(np.asarray(b.stability)):
             ax.plot(
                 f[seg],
                 a[seg],
-                {1: "-", 0: "--"}.get(v, ":"),
-                color=col if v >= 0 else "0.55",
-                lw=1.4 if v >= 0 else 1.8,
+                color=col,
+                ls=verdict(code).ls,
+                lw=1.4,
                 label=label if first else None,
             )
             first = False
         ax.plot(f, a, ".", color=col, ms=2.5)  # the computed points
         i = b.peak(output)
-        ax.plot(f[i], a[i], "o", color=col, ms=6, mfc=col if b.stable[i] else "white")
+        ax.plot(f[i], a[i], **marker_kwargs(int(b.stability[i]), col, "o"))
         if b.failed:
             ax.plot(f[-1], a[-1], "x", color=col, ms=7)
     name = branches[0].output_names[output] if branches and branches[0].output_names else "output"
     ylab = (
-        f"receptance: {name} amplitude / F ({unit}/N)"
+        f"receptance: {name} max |y(t)| / F ({unit}/N)"
         if per_level
-        else f"{name} amplitude ({unit})"
+        else f"{name}: largest |y(t)| over the period ({unit})"
     )
     if log and any(b.n_points for b in branches):
         ax.set_yscale("log")
         readable_log(ax, "y")
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel(ylab)
-    ax.set_title(
-        title or "frequency response (solid: stable, dashed: unstable, dotted grey: unknown)"
-    )
+    ax.set_title(title or "frequency response")
     if any(b.n_points for b in branches):
         from matplotlib.lines import Line2D
 
         handles, labels = ax.get_legend_handles_labels()
-        handles += [
-            Line2D([], [], color="0.3", ls="--", label="unstable (Hill)"),
-            Line2D([], [], color="0.55", ls=":", lw=1.8, label="stability unknown"),
-            Line2D([], [], color="0.3", ls="none", marker="o", label="peak"),
-        ]
-        ax.legend(handles=handles, loc="best", title="excitation force")
+        counts = verdict_counts(np.concatenate([np.asarray(b.stability) for b in branches]))
+        handles += [Line2D([], [], label=lab, **kw) for lab, kw in verdict_legend(counts)]
+        handles.append(Line2D([], [], color="0.3", ls="none", marker="o", label="peak"))
+        ax.legend(handles=handles, loc="best", title="force; stability (Hill)")
     return save_figure(fig, path)
 
 
@@ -133,7 +125,7 @@ def plot_status_map(branch, path: str | Path, title: str = "") -> Path:
         from matplotlib.ticker import MaxNLocator
 
         ax.yaxis.set_major_locator(MaxNLocator(integer=True))
-    handles = [plt.Rectangle((0, 0), 1, 1, color=c) for c in STATUS_COLORS]
+    handles = [plt.Rectangle((0, 0), 1, 1, facecolor=c, edgecolor="0.25") for c in STATUS_COLORS]
     ax.legend(handles, STATUS_LABELS, loc="upper right", fontsize=7)
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("contact element")

@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 
 from .common import pyplot, save_figure, styled
+from .palette import VERDICTS
+from .palette import verdict as palette_verdict
 
 STATUS_STYLE = {
     "ok": ("#59a14f", "ok"),
@@ -152,15 +154,20 @@ def plot_hbm_vs_time(checks: Sequence[dict[str, Any]], path: str | Path) -> Path
     for ax, ch in zip(axes[0], checks, strict=True):
         f = np.asarray(ch["freq_hz"])
         a = 1e3 * np.asarray(ch["amp"])  # m -> mm
-        v = np.asarray(ch["stability"], int)  # Hill's verdicts: 1, 0, -1 (unknown)
-        for code, style, lab in (  # unknown first: a definite verdict is drawn over it
-            (-1, dict(color="0.55", lw=1.8, ls=":"), "HBM (stability unknown)"),
-            (1, dict(color="#1f6fb4", lw=1.4), "HBM (stable)"),
-            (0, dict(color="#1f6fb4", lw=1.2, ls="--"), "HBM (Hill-unstable)"),
-        ):
+        v = np.asarray(ch["stability"], int)  # Hill's verdicts (render/palette.VERDICTS)
+        # the stable verdict first: the others are drawn over it, so that one point shows
+        for code in sorted({*(x.code for x in VERDICTS), *v.tolist()}, key=lambda k: k != 1):
+            verdict = palette_verdict(code)
             # each piece runs to the next point, so that isolated points still show
             m = (v == code) | np.r_[False, v[:-1] == code]
-            ax.plot(f, np.where(m, a, np.nan), label=lab, **style)
+            ax.plot(
+                f,
+                np.where(m, a, np.nan),
+                label=f"HBM ({verdict.label}, Hill)",
+                color="0.15",
+                lw=1.4,
+                ls=verdict.ls,
+            )
         for r in ch["points"]:
             filled = r["ti_converged"]
             ax.plot(

@@ -20,11 +20,15 @@ import numpy as np
 from ..geometry.records import BuiltGeometry
 from ..io import atomic_path
 from .common import offscreen_pyvista
+from .palette import ARROW_COLORS, RIG_COLOR, SIDE_COLORS, damper_color
 
-RIG_COLOR = "#c9d3e0"
-DAMPER_COLOR = "#e8912d"
-SIDE_COLORS = ("#c0392b", "#1f6fb2")  # contact points on platform 1 / platform 2
-EXC_COLOR, RESP_COLOR = "#2e8b57", "#8e44ad"
+EXC_COLOR, RESP_COLOR = ARROW_COLORS
+
+
+def mm_text(value_m: float, digits: int = 1) -> str:
+    """A length in m written in mm with ``digits`` decimals, never "-0.0"."""
+    out = f"{1e3 * value_m:.{digits}f}"
+    return out[1:] if out.startswith("-") and float(out) == 0.0 else out
 
 
 def _surface(pv, msh: Path):
@@ -49,12 +53,13 @@ def render_scene(geo: BuiltGeometry, png: str | Path, title: str | None = None) 
     groove = max(float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 2])), 0.01)
     radius = 0.035 * groove
     look = dict(smooth_shading=True, ambient=0.25, diffuse=0.8, specular=0.1)
+    damper_rgb = damper_color(geo.damper)  # the damper's colour in every figure
     p = pv.Plotter(off_screen=True, shape=(1, 3), window_size=(2100, 800), border=False)
 
     # 1. the whole rig
     p.subplot(0, 0)
     p.add_mesh(rig, color=RIG_COLOR, **look)
-    p.add_mesh(damper, color=DAMPER_COLOR, **look)
+    p.add_mesh(damper, color=damper_rgb, **look)
     for name, where, color in (
         ("excitation", geo.excitation_points, EXC_COLOR),
         ("response", geo.response_points, RESP_COLOR),
@@ -84,7 +89,7 @@ def render_scene(geo: BuiltGeometry, png: str | Path, title: str | None = None) 
     dam_cut = dam_grid.slice(normal=(0.0, 1.0, 0.0), origin=(0.0, y_mid, 0.0)).clean()
     flat = dict(ambient=1.0, diffuse=0.0, specular=0.0)
     p.add_mesh(rig_cut, color=RIG_COLOR, **flat)
-    p.add_mesh(dam_cut, color=DAMPER_COLOR, **flat)
+    p.add_mesh(dam_cut, color=damper_rgb, **flat)
     for body in (rig_cut, dam_cut):
         p.add_mesh(
             body.extract_feature_edges(
@@ -108,7 +113,7 @@ def render_scene(geo: BuiltGeometry, png: str | Path, title: str | None = None) 
                 lighting=False,
             )
     p.add_text(
-        f"section at y = {1e3 * y_mid:.1f} mm, seen along +y", font_size=11, position="upper_edge"
+        f"section at y = {mm_text(y_mid)} mm, seen along +y", font_size=11, position="upper_edge"
     )
     c = np.array([0.0, y_mid, float(np.mean(pts[:, 2]))])
     p.camera.parallel_projection = True
@@ -121,7 +126,7 @@ def render_scene(geo: BuiltGeometry, png: str | Path, title: str | None = None) 
     # 3. from below and in front, platforms translucent, every contact point
     p.subplot(0, 2)
     p.add_mesh(rig, color=RIG_COLOR, opacity=0.3, **look)
-    p.add_mesh(damper, color=DAMPER_COLOR, opacity=0.45, **look)
+    p.add_mesh(damper, color=damper_rgb, opacity=0.45, **look)
     for k in range(2):
         sel = pts[side == k]
         p.add_mesh(
@@ -131,9 +136,16 @@ def render_scene(geo: BuiltGeometry, png: str | Path, title: str | None = None) 
             lighting=False,
         )
     p.add_legend(bcolor="white", face="circle", size=(0.36, 0.09), loc="lower left")
-    gap = geo.stats.get("max_pair_gap_m", float("nan"))
+    gap = float(geo.stats.get("max_pair_gap_m", float("nan")))
+    gap_text = (
+        "matched node to node (gap zero)"
+        if gap == 0.0
+        else f"largest pair gap {mm_text(gap, 4)} mm"
+        if gap == gap
+        else "pair gap not recorded"
+    )
     p.add_text(
-        f"{geo.contact.n_pairs} contact pairs, largest pair gap {gap:.1e} m",
+        f"{geo.contact.n_pairs} contact pairs, {gap_text}",
         font_size=11,
         position="upper_edge",
     )

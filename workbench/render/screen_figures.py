@@ -5,7 +5,9 @@ one point per damper and family: the nonlinear peak growth ``A(F_max) /
 A(F_ref)`` (``F_ref`` the study force nearest ``0.32 F_max``, 9.6 N for
 30 N) and the friction energy per cycle at ``F_max``, against the screen's
 ``k2/k`` and its predicted saturation force. Where the single-mode rule
-holds, the filled markers (nonlinear) sit on the open ones (screen).
+holds, the filled markers (nonlinear) sit on the open ones (screen). The
+peaks are max |x(t)| (as docs/FINDINGS.md quotes this chart), colour and
+marker name the damper, line style the family (dotted: the screen).
 """
 
 from __future__ import annotations
@@ -79,19 +81,19 @@ def plot_design_rule(
     """Peak growth and friction energy against k2/k and the predicted saturation force.
 
     Writes a PNG at ``path`` (or returns the Figure when ``path`` is None)."""
-    import matplotlib
+    from .palette import damper_style, family_linestyle
 
     plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(13.5, 4.2))
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for p in points:
         groups.setdefault((p["damper"], p["family"]), []).append(p)
-    colors = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     seps: list[str] = []
     f_top = points[0]["f_top_n"] if points else 0.0
     f_ref = points[0]["f_ref_n"] if points else 0.0
-    for k, ((damper, fam), pts) in enumerate(sorted(groups.items())):
-        col = colors[k % len(colors)]
+    for (damper, fam), pts in sorted(groups.items()):
+        col, _, mk = damper_style(damper)
+        fls = family_linestyle(fam)
         lab = f"{damper}, {fam}"
         x = np.array([p["k2_over_k"] for p in pts])
         g_nl = np.array([np.nan if p["growth_nl"] is None else p["growth_nl"] for p in pts])
@@ -99,10 +101,11 @@ def plot_design_rule(
         e = np.array([np.nan if p["energy_mj"] is None else p["energy_mj"] for p in pts])
         cap = np.array([np.nan if p["f_cap_n"] is None else p["f_cap_n"] / f_top for p in pts])
         o = np.argsort(x)
-        axes[0].plot(x[o], g_nl[o], "o-", color=col, label=f"{lab}: harmonic balance")
-        axes[0].plot(x[o], g_sc[o], "o--", mfc="none", color=col, label=f"{lab}: screen")
-        axes[1].plot(x[o], e[o], "o-", color=col, label=lab)
-        axes[2].plot(cap, g_nl, "o", color=col, label=lab)
+        kw = dict(color=col, marker=mk)
+        axes[0].plot(x[o], g_nl[o], ls=fls, **kw, label=f"{lab}: harmonic balance")
+        axes[0].plot(x[o], g_sc[o], ls=":", mfc="none", **kw, label=f"{lab}: screen")
+        axes[1].plot(x[o], e[o], ls=fls, **kw, label=lab)
+        axes[2].plot(cap, g_nl, ls="none", **kw, label=lab)
         sep = np.array(["separates" in (p.get("verdict") or "") for p in pts])
         if sep.any():  # the rule ignores lift-off: ring those points
             for ax, xs, ys in ((axes[0], x, g_nl), (axes[2], cap, g_nl)):
@@ -119,7 +122,7 @@ def plot_design_rule(
         ax.text(
             0.01, ratio, f"linear ({ratio:.3g})", va="bottom", fontsize=8, color="0.4", transform=tr
         )
-        ax.set_ylabel(f"peak growth A({f_top:g} N) / A({f_ref:g} N)")
+        ax.set_ylabel(f"peak growth A({f_top:g} N) / A({f_ref:g} N), A = max |x(t)|")
     k_all = np.array([p["k2_over_k"] for p in points if p["k2_over_k"] > 0])
     log_k = k_all.size > 1 and k_all.max() / k_all.min() > 20
     for ax in axes[:2]:
@@ -150,4 +153,98 @@ def plot_design_rule(
     if title:
         fig.suptitle(title)
     fig.tight_layout()
+    return save_figure(fig, path)
+
+
+@styled
+def plot_screen_vs_curves(
+    screen_rows: Sequence[dict[str, Any]], cases: Sequence[Any], path: str | Path | None
+) -> Any:
+    """The coupling screen's predicted peak against the harmonic balance's, per family.
+
+    For each damper and family: the single-mode friction estimate of the
+    peak against the force (:func:`workbench.assembly.screen.predicted_peak`:
+    linear up to the slip onset, then levelling off towards the predicted
+    saturation force), dotted, and the harmonic-1 peaks of the curves, solid
+    with markers; a short bar marks the screen's separation onset, which the
+    estimate ignores. Log-log; colour, marker: the damper.
+    """
+    from ..assembly.screen import predicted_peak
+    from ..post.results import family_name
+    from .palette import damper_style
+
+    fams = list(
+        dict.fromkeys(str(r.get("family") or family_name(r["phase_deg"])) for r in screen_rows)
+    )
+    plt = pyplot()
+    fig, axes = plt.subplots(
+        1,
+        max(len(fams), 1),
+        figsize=(4.6 * max(len(fams), 1) + 1.4, 4.0),
+        squeeze=False,
+        layout="constrained",
+        sharey=True,
+    )
+    forces = sorted({float(c.force_n) for c in cases})
+    if not forces:
+        forces = [float(screen_rows[0].get("f_max_n") or 1.0)]
+    fx = np.geomspace(min(forces), max(forces), 60) if len(forces) > 1 else np.array(forces)
+    for k, fam in enumerate(fams):
+        ax = axes[0, k]
+        for row in (
+            r for r in screen_rows if (r.get("family") or family_name(r["phase_deg"])) == fam
+        ):
+            if row.get("variant"):
+                continue
+            col, ls, mk = damper_style(row["damper"])
+            r, fs, cap = row.get("stuck_peak_m_per_n"), row.get("f_slip_n"), row.get("f_cap_n")
+            if r and fs is not None and cap is not None:
+                y = [predicted_peak(r, fs, cap, f) * 1e3 for f in fx]
+                ax.plot(fx, y, color=col, ls=":", lw=1.8)
+            own = sorted(
+                (
+                    c
+                    for c in cases
+                    if c.damper == row["damper"]
+                    and not c.variant
+                    and abs(c.phase_deg - row["phase_deg"]) < 1e-9
+                    and c.h1_peak_index >= 0
+                ),
+                key=lambda c: c.force_n,
+            )
+            if own:
+                ax.plot(
+                    [c.force_n for c in own],
+                    [c.h1_mm[c.h1_peak_index] for c in own],
+                    color=col,
+                    ls=ls,
+                    marker=mk,
+                    lw=1.6,
+                    label=row["damper"],
+                )
+            sep = row.get("f_sep_n")
+            if sep is not None and min(forces) <= sep <= max(forces) and r:
+                a = (
+                    predicted_peak(r, fs, cap, sep) * 1e3
+                    if fs is not None and cap
+                    else r * sep * 1e3
+                )
+                ax.plot([sep, sep], [a / 1.25, a * 1.25], color=col, lw=2.5)
+        if len(forces) > 1:
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+        ax.set_title(fam, fontsize=10)
+        ax.set_xlabel("excitation force F (N)")
+        from .common import readable_log
+
+        readable_log(ax)
+    axes[0, 0].set_ylabel("vibration amplitude at resonance,\nharmonic 1 (mm)")
+    from matplotlib.lines import Line2D
+
+    handles = axes[0, 0].get_legend_handles_labels()[0] + [
+        Line2D([], [], color="0.3", ls=":", lw=1.8, label="screen estimate"),
+        Line2D([], [], color="0.3", lw=2.5, label="screen: separation onset"),
+    ]
+    fig.legend(handles=handles, loc="outside right upper", fontsize=8)
+    fig.suptitle("coupling screen (dotted) against the harmonic balance", fontsize=11)
     return save_figure(fig, path)

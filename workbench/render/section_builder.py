@@ -27,6 +27,7 @@ log = logging.getLogger(__name__)
 FIGURES, TABLES = "figures", "tables"
 # figure file names the sections write (anything else in figures/ is shown as found)
 OWN_PREFIXES = (
+    "answer_",
     "receptance_",
     "peak_amplitude_",
     "friction_energy_",
@@ -34,8 +35,10 @@ OWN_PREFIXES = (
     "status_shares_",
     "contact_",
     "sweep_",
+    "screen_",
 )
 OWN_TABLE_PREFIXES = (
+    "answer.",
     "peak_amplitude_",
     "peak_frequency_",
     "friction_energy_",
@@ -53,15 +56,21 @@ class _Section:
     text: list[str] = field(default_factory=list)
     figures: list[dict[str, str]] = field(default_factory=list)
     tables: list[dict[str, str]] = field(default_factory=list)
+    kind: str = ""  # "answer": the report's first screen (render/report.py)
+    notes: list[str] = field(default_factory=list)  # the answer's "how sure" lines
 
     def as_dict(self) -> dict[str, Any]:
-        return {
+        out: dict[str, Any] = {
             "id": self.id,
             "title": self.title,
             "text": self.text,
             "figures": self.figures,
             "tables": self.tables,
         }
+        if self.kind:
+            out["kind"] = self.kind
+            out["notes"] = self.notes
+        return out
 
 
 @dataclass
@@ -95,15 +104,15 @@ class _Builder:
         sec.figures.append(entry)
         self.jobs.append(_Job(lambda: draw(path), sec, [entry]))
 
-    def table(self, sec: _Section, name: str, table: Table, caption: str) -> None:
+    def table(
+        self, sec: _Section, name: str, table: Table, caption: str, *, name_files: bool = True
+    ) -> None:
+        """Write the table as CSV and markdown; the caption names the markdown file unless
+        ``name_files`` is False (the answer, where every line of the first screen counts)."""
         for path in table.write(self.tab_dir / name):
             self.written.add(path.name)
-        sec.tables.append(
-            {
-                "path": f"{TABLES}/{name}.csv",
-                "caption": f"{caption} (also as markdown: {TABLES}/{name}.md)",
-            }
-        )
+        note = f" (also as markdown: {TABLES}/{name}.md)" if name_files else ""
+        sec.tables.append({"path": f"{TABLES}/{name}.csv", "caption": caption + note})
 
     def run(self) -> None:
         for job in progress(self.jobs, desc="study figures", total=len(self.jobs), unit="fig"):
@@ -145,18 +154,21 @@ def _forces_text(forces: Sequence[float]) -> str:
 
 
 def _peak_sentence(cases: Sequence[CaseResult]) -> str:
-    """'cone: peak 0.0135 mm at 392.1 Hz (0.096 N) to 0.156 mm at 358.2 Hz (30 N)'."""
+    """'cone: 0.0135 mm at 392.1 Hz (0.096 N) to 0.156 mm at 358.2 Hz (30 N); ...' (the
+    harmonic-1 peaks)."""
+    from ..post.tables import num
+
     pc = peak_curve(cases)
     ok = [k for k in range(pc.force_n.size) if pc.amp_mm[k] == pc.amp_mm[k]]
     if not ok:
         return f"{pc.damper}: no point computed"
     a, b = ok[0], ok[-1]
-    first = f"{pc.amp_mm[a]:.3g} mm at {pc.freq_hz[a]:.1f} Hz ({pc.force_n[a]:g} N)"
+    first = f"{num(pc.amp_mm[a], 3)} mm at {pc.freq_hz[a]:.1f} Hz ({pc.force_n[a]:g} N)"
     if a == b:
         return f"{pc.damper}: peak {first}"
-    last = f"{pc.amp_mm[b]:.3g} mm at {pc.freq_hz[b]:.1f} Hz ({pc.force_n[b]:g} N)"
+    last = f"{num(pc.amp_mm[b], 3)} mm at {pc.freq_hz[b]:.1f} Hz ({pc.force_n[b]:g} N)"
     ratio = (pc.amp_mm[b] / pc.force_n[b]) / (pc.amp_mm[a] / pc.force_n[a])
     return (
         f"{pc.damper}: peak {first} to {last}; peak receptance at the highest force over "
-        f"that at the lowest {ratio:.3g} (1 for a linear response)"
+        f"that at the lowest {num(ratio, 3)} (1 for a linear response)"
     )

@@ -53,6 +53,7 @@ from typing import Any
 
 from ..post.results import StudyResults, family_name
 from ..post.tables import (
+    STUCK_TEXT,
     Table,
     base_variant,
     cases_table,
@@ -66,6 +67,7 @@ from ..post.tables import (
     status_shares_table,
 )
 from . import study_figures as sf
+from .palette import verdict_caption, verdict_counts, verdicts_shown
 from .section_builder import (
     FIGURES,
     OWN_PREFIXES,
@@ -105,7 +107,7 @@ def _receptances(b: _Builder, variant: str) -> None:
             f"receptances-{_fam_slug(p)}",
             f"Receptances, {fam}",
             [
-                f"Response amplitude per newton of excitation at the response point "
+                f"Harmonic-1 amplitude of the response per newton of excitation (blade 1, x) "
                 f"vs excitation frequency, forces {_forces_text(r.forces)}."
             ]
             + [_peak_sentence(curve_set(r, d, p, variant)) + "." for d in dampers],
@@ -115,11 +117,13 @@ def _receptances(b: _Builder, variant: str) -> None:
             styles = ", ".join(
                 f"{d} {_LINE_WORDS.get(sf.damper_style(d)[1], '')}".strip() for d in dampers
             )
+            counts = _counts(cases)
             b.figure(
                 sec,
                 f"{fs}_all",
-                f"{fam}: receptances of every damper and force in one axes ({styles}); "
-                "unstable parts on a grey band." + _failures(cases),
+                f"{fam}: receptances (harmonic-1 amplitude / F, mm/N) of every damper and "
+                f"force in one axes ({styles}, open markers along each curve); "
+                f"{_verdict_words(counts, band=True)}." + _failures(cases),
                 lambda path, cs=cases: sf.plot_receptance_overlay(cs, path),
             )
         for d in dampers:
@@ -127,33 +131,46 @@ def _receptances(b: _Builder, variant: str) -> None:
             b.figure(
                 sec,
                 f"{fs}_{slug(d)}",
-                f"{d} damper, {fam}: receptance |x|/F (mm/N) for every force; stable "
-                "solid, unstable (Hill) dashed." + _failures(own),
+                f"{d} damper, {fam}: receptance, harmonic-1 amplitude / F (mm/N), for every "
+                f"force; {_verdict_words(_counts(own))}." + _failures(own),
                 lambda path, cs=own: sf.plot_receptances(cs, path, forces=r.forces),
             )
+
+
+def _counts(cases) -> dict[int, int]:
+    import numpy as np
+
+    return verdict_counts(np.concatenate([c.branch.stability for c in cases]))
+
+
+def _verdict_words(counts: dict[int, int], band: bool = False) -> str:
+    return verdict_caption(counts, band)
 
 
 def _peaks_and_energy(b: _Builder, variant: str) -> None:
     r = b.results
     sec = b.section(
         "peaks",
-        "Peak amplitude vs excitation",
+        "Vibration amplitude at resonance vs excitation",
         [
-            "Largest response amplitude of each branch against the excitation force, "
-            "log-log: a damper that does not dissipate (a rolling cylinder) follows "
-            "the grey line of slope 1; a damper that saturates flattens."
+            "The resonance of each curve is its largest harmonic-1 amplitude of the "
+            "response (blade x at the response point): the vibration, without the mean "
+            "term, which a stuck or ratcheting damper shifts. Against the excitation "
+            "force, log-log: a damper that does not dissipate (a rolling cylinder) follows "
+            "the grey line of slope 1; a damper that saturates flattens. max |x(t)| and the "
+            "mean term at each resonance are in the table of cases."
         ],
     )
     en = b.section(
         "friction-energy",
         "Friction energy at resonance",
         [
-            "Energy dissipated by friction per cycle at the resonance peak of each "
+            "Energy dissipated by friction per cycle at the resonance of each "
             "branch, summed over every contact pair, mJ; one table per family with "
             "the dampers in rows and the forces in columns, as in the paper's "
             "Tables 1-2. An energy at or below 1e-6 times the largest of its table "
-            "or figure is round-off of contacts that do not slip: it reads "
-            "'stuck / 0' in the tables and sits in the 'stuck / 0' strip under "
+            f"or figure is round-off of contacts that do not slip: it reads "
+            f"'{STUCK_TEXT}' in the tables and sits in the '{STUCK_TEXT}' strip under "
             "the figure's log axis."
         ],
     )
@@ -166,21 +183,22 @@ def _peaks_and_energy(b: _Builder, variant: str) -> None:
         b.figure(
             sec,
             f"peak_amplitude_{fsl}",
-            f"{fam}: peak response amplitude (mm) vs excitation force (N), one curve per "
-            "damper; hollow markers: unstable peak; crosses: failed branch." + _failures(cases),
+            f"{fam}: vibration amplitude at resonance, harmonic 1 (mm), vs excitation force "
+            "(N), one curve per damper; the marker of each peak filled when stable, hollow "
+            "when unstable, half filled when unknown; crosses: failed branch." + _failures(cases),
             lambda path, cs=cases: sf.plot_peak_vs_force(cs, path),
         )
         b.table(
             sec,
             f"peak_amplitude_{fsl}",
             peak_amplitude_table(r, p, variant),
-            f"{fam}: peak response amplitude, mm",
+            f"{fam}: vibration amplitude at resonance, harmonic 1, mm",
         )
         b.table(
             sec,
             f"peak_frequency_{fsl}",
             peak_frequency_table(r, p, variant),
-            f"{fam}: frequency of the peak, Hz",
+            f"{fam}: resonance frequency (of the harmonic-1 peak), Hz",
         )
         b.table(
             en,
@@ -229,7 +247,7 @@ def _status(b: _Builder, variant: str) -> None:
                 f"status_map_{_fam_slug(p)}_{slug(d)}",
                 f"{d} damper, {fam}: contact status of every pair vs frequency at "
                 f"{_forces_text([c.force_n for c in own])} (stuck, stick-slip, partial "
-                "separation, full separation); dotted red line: resonance peak." + _failures(own),
+                "separation, full separation); dashed black line: the resonance." + _failures(own),
                 lambda path, cs=own: sf.plot_status_map(cs, path),
             )
         b.figure(
@@ -259,7 +277,7 @@ def _contact_maps(b: _Builder, variant: str, geometry_dirs: dict[str, Path]) -> 
             "the groove, the platforms left out, platform 1's contact at the bottom) "
             "at the resonance of the highest force: its status, and its friction "
             "energy per cycle in mJ, on one colour scale for every map (grey: "
-            "stuck / 0, at or below 1e-6 of the largest)."
+            f"{STUCK_TEXT}, at or below 1e-6 of the largest); the damper in its own colour."
         ],
     )
     mapped = []
@@ -271,7 +289,7 @@ def _contact_maps(b: _Builder, variant: str, geometry_dirs: dict[str, Path]) -> 
     # one energy colour scale for every map: families and dampers compare by colour
     from .contact_maps import energy_scale
 
-    scale = energy_scale([c.energy_mj[c.peak_index] for _, _, c in mapped])
+    scale = energy_scale([c.energy_mj[c.h1_peak_index] for _, _, c in mapped])
     for p, d, c in mapped:
         fam = family_name(p)
         stem = b.fig_dir / f"contact_{_fam_slug(p)}_{slug(d)}"
@@ -296,6 +314,39 @@ def _contact_maps(b: _Builder, variant: str, geometry_dirs: dict[str, Path]) -> 
                 optional=True,
             )
         )
+
+
+# ---- the answer (the report's first screen) -------------------------------------------
+
+
+def _answer(b: _Builder, variant: str) -> None:
+    """Which damper vibrates least at the highest force, by how much, how sure; the headline
+    chart (harmonic-1 peak against force, every family) beside it."""
+    from ..post.answer import answer, answer_table
+
+    r = b.results
+    ans = answer(r, variant)
+    if not ans["rows"]:
+        return
+    sec = b.section("answer", "The answer", ans["sentences"])
+    sec.kind, sec.notes = "answer", list(ans["sure"])
+    b.table(
+        sec,
+        "answer",
+        answer_table(ans["rows"]),
+        f"At F = {ans['force_n']:g} N on each blade, the resonance of each curve: its largest "
+        "harmonic-1 amplitude of blade 1 (x), least first; max |x(t)| and the mean of x at "
+        "that same point",
+        name_files=False,
+    )
+    cases = r.select(variant=variant)
+    b.figure(
+        sec,
+        "answer_peak_vs_force",
+        "Vibration amplitude at resonance (harmonic 1) against the force, one panel per "
+        "family; peak marker filled: stable, hollow: unstable, half: unknown." + _failures(cases),
+        lambda path, cs=cases: sf.plot_answer(cs, path),
+    )
 
 
 # ---- sweeps ---------------------------------------------------------------------------
@@ -330,6 +381,19 @@ def _screen(b: _Builder, rows: list[dict[str, Any]]) -> None:
         Table(tuple(head), tuple(tuple(r) for r in body)),
         "Coupling screen of every damper and family",
     )
+    cases = [c for c in b.results.cases if not c.variant]
+    if cases and b.results.kind != "sweep":
+        from .screen_figures import plot_screen_vs_curves
+
+        b.figure(
+            sec,
+            "screen_vs_curves",
+            "The screen's single-mode estimate of the peak against the force (dotted: linear "
+            "up to the slip onset, then levelling off) and the harmonic balance's harmonic-1 "
+            "peaks (solid, markers); a short bar: the screen's separation onset, which the "
+            "estimate ignores.",
+            lambda path, rows=rows, cs=cases: plot_screen_vs_curves(rows, cs, path),
+        )
 
 
 # ---- figures found on disk, the cases table -------------------------------------------
@@ -406,7 +470,13 @@ def _cases(b: _Builder) -> None:
     r = b.results
     notes = sf.failure_notes(r.cases)
     n_ok = sum(1 for c in r.cases if c.branch.completed and not c.branch.failed)
-    text = [f"{len(r.cases)} cases, {n_ok} completed."]
+    counts = _counts(r.cases)
+    words = ", ".join(f"{counts.get(v.code, 0)} {v.label}" for v in verdicts_shown(counts))
+    text = [
+        f"{len(r.cases)} cases, {n_ok} completed. Points by stability verdict (Hill's "
+        f"method): {words}. Amplitudes at the resonance, the largest harmonic-1 "
+        "amplitude of each curve; max |x(t)| and the mean of x at that same point."
+    ]
     text += notes
     text += [f"Peak NOT reached, {c.case_id}: {c.peak_note()}." for c in r.uncovered()]
     sec = b.section("cases", "Cases", text)
@@ -414,7 +484,8 @@ def _cases(b: _Builder) -> None:
         sec,
         "cases",
         cases_table(r),
-        "Every case: resonance, friction energy, stability, cost and completion",
+        "Every case: resonance, vibration amplitude with max |x(t)| and the mean term, "
+        "friction energy, stability at the peak and the points of each verdict, cost, curve",
     )
 
 
@@ -441,6 +512,8 @@ def build_sections(
         b.section("cases", "Cases", ["The study has no case."])
         return [s.as_dict() for s in b.sections]
     modes, other = _found_files(b)
+    if results.kind != "sweep" or not results.inputs.get("sweep"):
+        _answer(b, base_variant(results))
     if modes is not None:
         b.sections.append(modes)
     if results.extras.get("screen"):

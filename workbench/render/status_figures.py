@@ -16,6 +16,7 @@ import numpy as np
 from ..post.results import STATUS_NAMES, CaseResult
 from ..post.tables import status_share_curves
 from .common import pyplot, save_figure, styled
+from .palette import NOT_COMPUTED_COLOR, NOT_COMPUTED_EDGE, RESONANCE_COLOR, STATUS_EDGE
 from .study_style import (
     FIGSIZE,
     STATUS_COLORS,
@@ -28,10 +29,8 @@ from .study_style import (
     status_legend_handles,
 )
 
-NOT_COMPUTED_COLOR = "#f2f2f2"
-
-
-NOT_COMPUTED_EDGE = "#b0b0b0"
+# the resonance line stays visible on every status colour: black with a white rim
+_RESONANCE = dict(color=RESONANCE_COLOR, lw=1.6, ls=(0, (2, 1.5)))
 
 
 ZOOM_MAX_SHARE = 0.6  # no zoom row when the slipping part covers more of the band than this
@@ -70,7 +69,7 @@ def status_zoom(case: CaseResult) -> tuple[float, float] | None:
     if st.ndim != 2 or st.shape[0] == 0:
         return None
     active = (st != 0).any(axis=1)
-    i = case.peak_index
+    i = case.h1_peak_index
     if active.any():
         a, b = float(f[active].min()), float(f[active].max())
     else:
@@ -150,9 +149,13 @@ def _status_panel(ax, case: CaseResult, side_labels: bool = True) -> None:
             va="center",
             fontsize=8,
         )
-    i = case.peak_index
+    i = case.h1_peak_index
     if i >= 0:
-        ax.axvline(f[i], color="#c0392b", lw=1.4, ls=":")
+        from matplotlib import patheffects
+
+        ax.axvline(
+            f[i], **_RESONANCE, path_effects=[patheffects.withStroke(linewidth=3.2, foreground="w")]
+        )
     ax.grid(False)
 
 
@@ -164,7 +167,7 @@ def plot_status_map(
 
     One panel per case (e.g. 9.6 N and 30 N), pairs on y (side 0 first,
     then side 1 above the dashed line), frequency on x, colour the status;
-    the dotted red line marks the resonance peak.
+    the dashed black line marks the resonance (the harmonic-1 peak).
     """
     cases = _one_set(cases, "cases")
     plt = pyplot()
@@ -190,7 +193,7 @@ def plot_status_map(
             ax = axes[row, k]
             _status_panel(ax, c, side_labels=k == n - 1)
             ax.set_xlabel("frequency (Hz)")
-        i = c.peak_index
+        i = c.h1_peak_index
         head = f"F = {c.force_n:g} N" + (f", peak at {c.freq_hz[i]:.1f} Hz" if i >= 0 else "")
         if c.branch.failed:
             head += (
@@ -205,9 +208,7 @@ def plot_status_map(
             axes[1, k].set_title(
                 f"zoom: {w0:.1f}-{w1:.1f} Hz, where pairs slip or open", fontsize=9
             )
-            axes[0, k].axvspan(
-                w0, w1, facecolor="none", edgecolor="#c0392b", lw=1.0, ls="--", zorder=3
-            )
+            axes[0, k].axvspan(w0, w1, facecolor="none", edgecolor="0.2", lw=1.0, ls="--", zorder=3)
     for row in range(rows):
         axes[row, 0].set_ylabel("contact pair number")
     from matplotlib.lines import Line2D
@@ -220,7 +221,7 @@ def plot_status_map(
             hatch="////",
             label="not computed (no point)",
         ),
-        Line2D([], [], color="#c0392b", ls=":", lw=1.4, label="resonance peak"),
+        Line2D([], [], **_RESONANCE, label="resonance (harmonic-1 peak)"),
     ]
     fig.legend(
         handles=status_legend_handles() + extra, loc="outside lower center", ncol=6, frameon=False
@@ -254,7 +255,9 @@ def plot_status_shares(
             if np.nanmax(v, initial=0.0) <= 0.0:
                 continue
             seen[k] = True
-            ax.plot(forces, v, color=STATUS_COLORS[k], ls=ls, marker=mk, ms=5, lw=1.6)
+            ax.plot(
+                forces, v, color=STATUS_COLORS[k], ls=ls, marker=mk, ms=5, lw=1.8, mec=STATUS_EDGE
+            )
     from matplotlib.lines import Line2D
 
     fs = np.array(forces_all)

@@ -9,20 +9,15 @@ and the share of each status at resonance against force (Fig. 13). Each
 :class:`~workbench.post.results.CaseResult`), writes a PNG and returns its
 path; the numbers come from :mod:`workbench.post.tables`.
 
-One visual language for every figure of every study:
-
-* a damper always has the same colour, line style and marker
-  (:data:`DAMPER_STYLE`: cone blue solid, cylinder orange dashed, wedge
-  gold dotted, as the paper's figures);
-* a force level always has the same colour in the per-damper figures
-  (dark purple for the lowest through orange for the highest);
-* a contact status always has the same colour (:data:`STATUS_COLORS`:
-  stuck dark grey, stick-slip orange, partial separation green, full
-  separation blue), here and in the 3-D contact maps;
-* a branch's unstable points (Hill) are dashed in the per-damper figures
-  and highlighted with a grey band where damper line styles are in use;
-  a branch that failed is drawn up to where it stopped, ended with a cross
-  and labelled "failed".
+One visual language for every figure of every study (:mod:`.palette`):
+a damper always has the same colour, line style and marker, a force level
+the same colour, a contact status the same colour (here and in the 3-D
+contact maps), and a stability verdict the same line style (stable solid,
+unstable dashed, unknown dotted; where line styles name the dampers, the
+unstable and unknown pieces lie on a band of their own). A branch that
+failed is drawn up to where it stopped, ended with a cross and labelled
+"failed". Amplitudes are the harmonic-1 amplitude of the response (the
+vibration, without the mean term), unless a label says max |x(t)|.
 
 Figures have a fixed size and resolution and carry no time stamp, so the
 same inputs give the same pixels (the image regression test relies on it).
@@ -36,9 +31,16 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..post.results import CaseResult
 from ..post.tables import peak_curve, sweep_value
 from .common import pyplot, save_figure, styled
+from .palette import (
+    marker_kwargs,
+    peak_marker_legend,
+    verdict_counts,
+    verdict_legend,
+)
 from .status_figures import plot_status_map, plot_status_shares, status_zoom
 from .study_style import (
     _EXTRA_COLORS,
@@ -80,6 +82,7 @@ __all__ = [
     "option_label",
     "plot_cone_angle_energy",
     "plot_energy_vs_force",
+    "plot_answer",
     "plot_peak_vs_force",
     "plot_receptance_overlay",
     "plot_receptances",
@@ -103,34 +106,33 @@ def plot_receptances(
     forces: Sequence[float] | None = None,
     title: str | None = None,
 ) -> Path:
-    """Receptance vs frequency of one damper and one family, every force in one axes.
+    """Receptance (harmonic-1 amplitude / F) vs frequency of one damper and one family.
 
     Colour names the force (``forces``: the study's force list, so colours
-    agree across figures); stable parts solid, unstable dashed; a failed
-    branch ends with a cross. Log receptance axis when the peaks span more
-    than a factor 20.
+    agree across figures); the line style the stability verdict of each
+    piece (stable solid, unstable dashed, unknown dotted; the legend counts
+    the points of each); a failed branch ends with a cross. Log receptance
+    axis when the peaks span more than a factor 20.
     """
     cases = _one_set(cases, "cases")
     colors = force_colors(forces if forces is not None else [c.force_n for c in cases])
     plt = pyplot()
     fig, ax = plt.subplots(figsize=FIGSIZE, layout="constrained")
-    peaks, any_unstable = [], False
+    peaks = []
     for c in cases:
-        x, y = c.freq_hz, c.receptance_mm_per_n
+        x, y = c.freq_hz, c.h1_receptance_mm_per_n
         col = colors.get(float(c.force_n), "k")
         if x.size:
             _draw_branch(
                 ax,
                 x,
                 y,
-                c.stable,
-                unknown=c.branch.unknown,
+                c.branch.stability,
                 color=col,
                 label=_flabel(c.force_n) + _failed_suffix(c),
             )
             _mark_failure(ax, c, x, y, col)
             peaks.append(float(np.nanmax(y)))
-            any_unstable |= bool(np.any(c.branch.unstable))
         else:
             ax.plot([], [], color=col, label=_flabel(c.force_n) + " (no point)")
     if _wants_log(peaks):
@@ -138,15 +140,16 @@ def plot_receptances(
         _readable_log(ax, "y")
     ax.set(
         xlabel="frequency (Hz)",
-        ylabel="receptance |x| / F (mm/N)",
+        ylabel="receptance, harmonic 1: |X1| / F (mm/N)",
         title=title or f"{cases[0].damper} damper, {cases[0].family}: receptances",
     )
-    entries = [("stable", dict(color="0.3", ls="-"))]
-    if any_unstable:
-        entries.append(("unstable (Hill)", dict(color="0.3", ls="--")))
+    counts = verdict_counts(np.concatenate([c.branch.stability for c in cases]))
+    entries = verdict_legend(counts)
     if any(c.branch.failed for c in cases):
         entries.append(("branch failed here", dict(color="0.3", ls="none", marker="x", mew=2)))
-    _side_legends(fig, (ax.get_legend_handles_labels()[0], "excitation"), (entries, "branch"))
+    _side_legends(
+        fig, (ax.get_legend_handles_labels()[0], "excitation"), (entries, "stability (Hill)")
+    )
     return save_figure(fig, path)
 
 
@@ -156,39 +159,52 @@ def plot_receptance_overlay(
 ) -> Path:
     """Every damper's receptances of one family in one axes (the paper's Fig. 9 manner).
 
-    Each damper has its own colour and line style (cone solid, cylinder
-    dashed, wedge dotted); all its forces share them. Unstable parts lie on
-    a grey band; a failed branch ends with a cross.
+    Each damper has its own colour, line style and open markers along its
+    curves (so curves that lie on one another stay apart); all its forces
+    share them. Unstable and unknown pieces lie on their verdict's band; a
+    failed branch ends with a cross.
     """
     cases = _one_family(cases, "cases")
     plt = pyplot()
     fig, ax = plt.subplots(figsize=FIGSIZE, layout="constrained")
-    peaks, any_unstable = [], False
-    for d in _dampers(cases):
-        col, ls, _ = damper_style(d)
+    peaks = []
+    dampers = _dampers(cases)
+    for k, d in enumerate(dampers):
+        col, ls, mk = damper_style(d)
         own = sorted((c for c in cases if c.damper == d), key=lambda c: c.force_n)
         failed = any(c.branch.failed for c in own)
         first = True
         for c in own:
-            x, y = c.freq_hz, c.receptance_mm_per_n
+            x, y = c.freq_hz, c.h1_receptance_mm_per_n
             if not x.size:
                 continue
+            every = max(1, x.size // 7)
             _draw_branch(
                 ax,
                 x,
                 y,
-                c.stable,
-                unknown=c.branch.unknown,
+                c.branch.stability,
                 color=col,
                 ls_stable=ls,
                 band=True,
                 lw=1.4,
-                label=(d + (" (failed)" if failed else "")) if first else None,
+                marker=mk,
+                # markers of different dampers at different points along the curve
+                markevery=every + k,
             )
+            if first:
+                ax.plot(
+                    [],
+                    [],
+                    color=col,
+                    ls=ls,
+                    marker=mk,
+                    mfc="white",
+                    label=d + (" (failed)" if failed else ""),
+                )
             _mark_failure(ax, c, x, y, col)
             first = False
             peaks.append(float(np.nanmax(y)))
-            any_unstable |= bool(np.any(c.branch.unstable))
     if _wants_log(peaks):
         ax.set_yscale("log")
         _readable_log(ax, "y")
@@ -196,15 +212,14 @@ def plot_receptance_overlay(
     fs = ", ".join(f"{f:g}" for f in sorted({c.force_n for c in cases}))
     ax.set(
         xlabel="frequency (Hz)",
-        ylabel="receptance |x| / F (mm/N)",
+        ylabel="receptance, harmonic 1: |X1| / F (mm/N)",
         title=title or f"{fam}: receptances of every damper\nF = {fs} N",
     )
-    band = dict(UNSTABLE_BAND)
-    band.pop("zorder")
+    counts = verdict_counts(np.concatenate([c.branch.stability for c in cases]))
     _side_legends(
         fig,
         (ax.get_legend_handles_labels()[0], "damper"),
-        ([("unstable (Hill)", band)] if any_unstable else [], None),
+        (verdict_legend(counts, band=True), "stability (Hill)"),
     )
     return save_figure(fig, path)
 
@@ -223,15 +238,14 @@ def plot_sweep_receptances(
     fig, ax = plt.subplots(figsize=FIGSIZE, layout="constrained")
     peaks = []
     for c, v in zip(cases, values, strict=True):
-        x, y = c.freq_hz, c.receptance_mm_per_n
+        x, y = c.freq_hz, c.h1_receptance_mm_per_n
         if not x.size:
             continue
         _draw_branch(
             ax,
             x,
             y,
-            c.stable,
-            unknown=c.branch.unknown,
+            c.branch.stability,
             color=colors[v],
             label=f"{option} = {v:g} {unit}".rstrip() + _failed_suffix(c),
         )
@@ -243,10 +257,15 @@ def plot_sweep_receptances(
     c0 = cases[0]
     ax.set(
         xlabel="frequency (Hz)",
-        ylabel="receptance |x| / F (mm/N)",
+        ylabel="receptance, harmonic 1: |X1| / F (mm/N)",
         title=title or f"{c0.damper}, {c0.family}, F = {c0.force_n:g} N: sweep of {name}",
     )
-    _side_legends(fig, (ax.get_legend_handles_labels()[0], option))
+    counts = verdict_counts(np.concatenate([c.branch.stability for c in cases]))
+    _side_legends(
+        fig,
+        (ax.get_legend_handles_labels()[0], option),
+        (verdict_legend(counts), "stability (Hill)"),
+    )
     return save_figure(fig, path)
 
 
@@ -276,19 +295,8 @@ def _proportional_guide(ax, forces: np.ndarray, values: np.ndarray) -> None:
     )
 
 
-@styled
-def plot_peak_vs_force(
-    cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None
-) -> Path:
-    """Largest response amplitude vs excitation force, one curve per damper (paper Fig. 11).
-
-    Log-log, so a linear response (a rolling cylinder) is a straight line
-    of slope 1, drawn in grey through the lowest force for reference.
-    Hollow markers: the peak point is unstable; a cross: the branch failed.
-    """
-    cases = _one_family(cases, "cases")
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=FIGSIZE, layout="constrained")
+def _peak_axes(ax, cases: Sequence[CaseResult]) -> None:
+    """Harmonic-1 peak amplitude vs force of every damper of one family, in ``ax``."""
     lowest = []
     for d, pc in _by_damper(cases):
         col, ls, mk = damper_style(d)
@@ -299,12 +307,17 @@ def plot_peak_vs_force(
             color=col,
             ls=ls,
             lw=1.8,
-            marker=mk,
-            ms=6,
             label=d + (" (failed)" if pc.failed.any() else ""),
         )
-        bad = ok & ~pc.stable
-        ax.plot(pc.force_n[bad], pc.amp_mm[bad], ls="none", marker=mk, ms=6, mfc="white", mec=col)
+        for k in np.flatnonzero(ok):
+            ax.plot(pc.force_n[k], pc.amp_mm[k], **marker_kwargs(int(pc.verdict[k]), col, mk))
+            if not pc.covered[k]:  # a lower bound: the peak lies above
+                ax.annotate(
+                    "",
+                    xy=(pc.force_n[k], pc.amp_mm[k] * 1.35),
+                    xytext=(pc.force_n[k], pc.amp_mm[k]),
+                    arrowprops=dict(arrowstyle="->", color=col, lw=1.4),
+                )
         ax.plot(pc.force_n[ok & pc.failed], pc.amp_mm[ok & pc.failed], "x", color=col, ms=10, mew=2)
         if ok.any():
             lowest.append((pc.force_n[ok][0], pc.amp_mm[ok][0]))
@@ -315,14 +328,101 @@ def plot_peak_vs_force(
     if forces.size > 1:  # log-log: the linear guide is a line of slope 1 at any force span
         ax.set_xscale("log")
         ax.set_yscale("log")
-    ax.set(
-        xlabel="excitation force F (N)",
-        ylabel="peak response amplitude (mm)",
-        title=title or f"{cases[0].family}: peak amplitude vs excitation",
-    )
-    ax.legend(loc="upper left", title="damper")
+    ax.set(xlabel="excitation force F (N)", ylabel="vibration amplitude, harmonic 1 (mm)")
     _readable_log(ax)
+    if 1 < forces.size <= 4:  # few forces: tick each of them
+        from matplotlib.ticker import NullFormatter, NullLocator
+
+        ax.set_xticks(forces, [f"{f:g}" for f in forces])
+        ax.xaxis.set_minor_locator(NullLocator())
+        ax.xaxis.set_minor_formatter(NullFormatter())
+
+
+def _damper_handles(cases: Sequence[CaseResult]) -> list:
+    """Legend handles of the dampers (line, marker) and of the linear guide line."""
+    from matplotlib.lines import Line2D
+
+    out = []
+    for d in _dampers(cases):
+        col, ls, mk = damper_style(d)
+        failed = any(c.branch.failed for c in cases if c.damper == d)
+        lab = d + (" (failed)" if failed else "")
+        out.append(Line2D([], [], color=col, ls=ls, lw=1.8, marker=mk, ms=6, label=lab))
+    if len({c.force_n for c in cases}) > 1:
+        out.append(
+            Line2D([], [], color="0.6", lw=1.0, ls=(0, (6, 3)), label="proportional to F (linear)")
+        )
+    return out
+
+
+def _peak_legend_entries(cases: Sequence[CaseResult]) -> list[tuple[str, dict]]:
+    out = peak_marker_legend()
+    if any(not c.h1_peak_covered for c in cases):
+        out.append(
+            ("peak not reached (lower bound)", dict(color="0.25", ls="none", marker="$\\uparrow$"))
+        )
+    if any(c.branch.failed for c in cases):
+        out.append(("branch failed", dict(color="0.25", ls="none", marker="x", mew=2)))
+    return out
+
+
+@styled
+def plot_peak_vs_force(
+    cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None
+) -> Path:
+    """Harmonic-1 peak amplitude vs excitation force, one curve per damper (paper Fig. 11).
+
+    Log-log, so a linear response (a rolling cylinder) is a straight line
+    of slope 1, drawn in grey through the lowest force for reference. The
+    marker of each peak is filled when stable, hollow when unstable, half
+    filled when unknown; an arrow up: the curve stopped before its peak (a
+    lower bound); a cross: the branch failed.
+    """
+    cases = _one_family(cases, "cases")
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=FIGSIZE, layout="constrained")
+    _peak_axes(ax, cases)
+    ax.set_title(title or f"{cases[0].family}: vibration amplitude at resonance vs excitation")
+    _side_legends(fig, (_damper_handles(cases), "damper"), (_peak_legend_entries(cases), "peak"))
     return save_figure(fig, path)
+
+
+@styled
+def plot_answer(cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None) -> Path:
+    """The report's headline chart: harmonic-1 peak amplitude vs force, one panel per family
+    (in-phase first), every damper in each, the same markers as :func:`plot_peak_vs_force`."""
+    from ..post.results import family_name
+
+    fams = sorted({round(c.phase_deg, 9) for c in cases}, key=_family_key)
+    if not fams:
+        raise InputError("cases", "[]", "at least one case")
+    plt = pyplot()
+    n = len(fams)
+    fig, axes = plt.subplots(
+        n, 1, figsize=(5.6, 0.75 + 2.3 * n), layout="constrained", squeeze=False, sharex=True
+    )
+    for k, p in enumerate(fams):
+        ax = axes[k, 0]
+        _peak_axes(ax, [c for c in cases if abs(c.phase_deg - p) < 1e-9])
+        ax.set_title(family_name(p), fontsize=10, loc="left")
+        ax.set_ylabel("")
+        if k < n - 1:
+            ax.set_xlabel("")
+    fig.supylabel("vibration amplitude at resonance, harmonic 1 (mm)", fontsize=10)
+    from matplotlib.lines import Line2D
+
+    handles = _damper_handles(cases) + [
+        Line2D([], [], label=lab, **kw) for lab, kw in _peak_legend_entries(cases)
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8, frameon=False)
+    fig.suptitle(title or "vibration amplitude at resonance vs excitation", fontsize=11)
+    return save_figure(fig, path)
+
+
+def _family_key(p: float) -> tuple[int, float]:
+    from ..post.results import family_name
+
+    return ({"in-phase": 0, "out-of-phase": 1}.get(family_name(p), 2), float(p) % 360.0)
 
 
 @styled

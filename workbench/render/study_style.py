@@ -1,15 +1,14 @@
-"""The visual language shared by every study figure: damper, force and status styles.
+"""The drawing helpers every study figure shares, in the styles of :mod:`.palette`.
 
-A damper always has the same colour, line style and marker
-(:data:`DAMPER_STYLE`), a force level the same colour, a contact status the
-same colour (:data:`STATUS_COLORS`); plus the small drawing helpers the
-figure modules share (a branch with its unstable pieces, a failure cross,
-side legends). See :mod:`.study_figures` for the figures themselves.
+A damper always has the same colour, line style and marker, a force level
+the same colour, a contact status the same colour and a stability verdict
+the same line style: all of them come from :mod:`.palette` (re-exported
+here). The helpers: a branch drawn piece by piece by its verdicts, a
+failure cross, side legends. See :mod:`.study_figures` for the figures.
 """
 
 from __future__ import annotations
 
-import zlib
 from collections.abc import Sequence
 
 import numpy as np
@@ -17,54 +16,43 @@ import numpy as np
 from ..errors import InputError
 from ..geometry.shapes import all_shapes
 from ..post.results import STATUS_NAMES, CaseResult
-from ..post.tables import stability_runs as _runs
 from .common import readable_log
+from .palette import (
+    EXTRA_STYLES,
+    STATUS_COLORS,
+    STATUS_EDGE,
+    VERDICTS,
+    damper_style,
+    force_colors,
+    verdict,
+    verdict_counts,
+    verdict_legend,
+    verdict_runs,
+)
 
-# colour, line style, marker of each damper (the paper: cone solid, cylinder dashed, wedge dotted)
-
-# (each shape names its own: workbench/geometry/shapes/<name>.py)
-DAMPER_STYLE: dict[str, tuple[str, str, str]] = {s.name: s.style for s in all_shapes()}
-
-
-_EXTRA_COLORS = ("#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#7f7f7f")
-# status 0 stuck, 1 stick-slip, 2 partial separation, 3 full separation
-
-
-STATUS_COLORS: tuple[str, str, str, str] = ("#3a3a3a", "#f28e2b", "#59a14f", "#4e79a7")
-
+# colour, line style, marker of each damper: its shape's style entry (render/palette.py)
+DAMPER_STYLE: dict[str, tuple] = {s.name: s.style for s in all_shapes()}
+_EXTRA_COLORS = tuple(c for c, _, _ in EXTRA_STYLES)
 
 FAMILY_STYLE = {"in-phase": "-", "out-of-phase": "--"}
 
-
-UNSTABLE_BAND = dict(color="0.55", lw=6.0, alpha=0.35, solid_capstyle="round", zorder=1)
-
+UNSTABLE_BAND = dict(VERDICTS[1].band or {})  # kept importable (the unstable verdict's band)
 
 FIGSIZE = (7.2, 4.6)  # inches; the report shows them at 110 dpi
 
-
-def damper_style(damper: str) -> tuple[str, str, str]:
-    """(colour, line style, marker) of a damper; a variant ("cone-12deg") inherits its base's."""
-    styles = {sh.name: sh.style for sh in all_shapes()}  # the registry, as it is now
-    if damper in styles:
-        return styles[damper]
-    for base, style in styles.items():
-        if damper.startswith(base):
-            return style
-    k = zlib.crc32(damper.encode()) % len(_EXTRA_COLORS)
-    return (_EXTRA_COLORS[k], "-.", "D")
-
-
-def force_colors(forces: Sequence[float]) -> dict[float, str]:
-    """A colour per force, lowest dark purple to highest orange (plasma 0 .. 0.8)."""
-    import matplotlib
-
-    fs = sorted(set(float(f) for f in forces))
-    cmap = matplotlib.colormaps["plasma"]
-    n = len(fs)
-    return {
-        f: matplotlib.colors.to_hex(cmap(0.8 * (i / (n - 1) if n > 1 else 0.0)))
-        for i, f in enumerate(fs)
-    }
+__all__ = [
+    "DAMPER_STYLE",
+    "FAMILY_STYLE",
+    "FIGSIZE",
+    "STATUS_COLORS",
+    "STATUS_EDGE",
+    "UNSTABLE_BAND",
+    "damper_style",
+    "force_colors",
+    "status_legend_handles",
+    "verdict_counts",
+    "verdict_legend",
+]
 
 
 def status_legend_handles(counts: Sequence[int] | None = None) -> list:
@@ -74,7 +62,18 @@ def status_legend_handles(counts: Sequence[int] | None = None) -> list:
     out = []
     for k, name in enumerate(STATUS_NAMES):
         lab = name if counts is None else f"{name} ({counts[k]})"
-        out.append(Line2D([], [], ls="none", marker="s", ms=8, color=STATUS_COLORS[k], label=lab))
+        out.append(
+            Line2D(
+                [],
+                [],
+                ls="none",
+                marker="s",
+                ms=8,
+                color=STATUS_COLORS[k],
+                mec=STATUS_EDGE,
+                label=lab,
+            )
+        )
     return out
 
 
@@ -90,39 +89,55 @@ def _draw_branch(
     ax,
     x: np.ndarray,
     y: np.ndarray,
-    stable: np.ndarray,
+    stability: np.ndarray,
     *,
     color: str,
-    ls_stable: str = "-",
-    ls_unstable: str = "--",
+    ls_stable: str | None = None,
     lw: float = 1.6,
     band: bool = False,
     label: str | None = None,
-    unknown: np.ndarray | None = None,
+    marker: str | None = None,
+    markevery: int | None = None,
 ) -> None:
-    """A curve drawn solid where stable and ``ls_unstable`` (or a grey band) where not;
-    points of unknown stability (``unknown``, Hill not computed or not trusted) dotted grey."""
+    """A curve drawn piece by piece by its stability verdicts (:data:`palette.VERDICTS`).
+
+    Where colour names the force, each verdict has its own line style
+    (stable solid, unstable dashed, unknown dotted). Where line style names
+    the damper (``band=True``, ``ls_stable`` its line style) every piece
+    keeps the damper's line style and the unstable and unknown pieces lie on
+    their verdict's band. ``stability`` is the branch's int8 verdict array
+    (a bool array reads as stable / unstable). ``marker`` every
+    ``markevery`` points tells overlapping curves apart.
+    """
+    codes = np.asarray(stability)
+    codes = codes.astype(int) if codes.dtype != bool else np.where(codes, 1, 0)
     first = True
-    if unknown is not None and np.any(unknown):
-        unk = np.asarray(unknown, dtype=bool)
-        for sl, u in _runs(~unk):
-            if not u:
-                j = slice(max(sl.start - 1, 0), min(sl.stop + 1, x.size))
-                ax.plot(x[j], y[j], color="0.55", lw=lw + 0.3, ls=":", zorder=3)
-        y = np.where(unk, np.nan, y)
-    for sl, ok in _runs(stable):
-        if not ok and band:
-            ax.plot(x[sl], y[sl], **UNSTABLE_BAND)
+    for sl, code in verdict_runs(codes):
+        v = verdict(code)
+        if band and v.band is not None:
+            ax.plot(x[sl], y[sl], **v.band)
         ax.plot(
             x[sl],
             y[sl],
             color=color,
             lw=lw,
-            ls=ls_stable if (ok or band) else ls_unstable,
+            ls=(ls_stable or "-") if band else v.ls,
             label=label if first else None,
             zorder=2,
         )
         first = False
+    if marker and x.size:
+        every = markevery or max(1, x.size // 8)
+        ax.plot(
+            x[every // 2 :: every],
+            y[every // 2 :: every],
+            ls="none",
+            marker=marker,
+            ms=4.5,
+            color=color,
+            mfc="white",
+            zorder=3,
+        )
 
 
 def _mark_failure(ax, case: CaseResult, x: np.ndarray, y: np.ndarray, color: str) -> None:

@@ -17,6 +17,7 @@ from ..errors import InputError
 from ..post.results import CaseResult, family_name
 from ..post.tables import sweep_curve, sweep_value
 from .common import pyplot, save_figure, styled
+from .palette import marker_kwargs
 from .study_style import (
     DAMPER_STYLE,
     FAMILY_STYLE,
@@ -109,22 +110,21 @@ def plot_sweep(
                         lw=1.7,
                         label=lab if (row == 0 and col == 0) else None,
                     )
-                    bad = ~sc.stable
-                    ax.plot(
-                        sc.value[bad], y[bad], ls="none", marker=mk, ms=6, mfc="white", mec=color
-                    )
+                    codes = sc.verdict if sc.verdict is not None else sc.stable.astype(int)
+                    for k in np.flatnonzero(codes != 1):  # hollow: unstable, half: unknown
+                        ax.plot(sc.value[k], y[k], **marker_kwargs(int(codes[k]), color, mk))
                     ax.plot(sc.value[sc.failed], y[sc.failed], "x", color=color, ms=10, mew=2)
         axes[0, col].set_title(
             family_name(p) + (f", F = {forces[0]:g} N" if len(forces) == 1 else "")
         )
         axes[1, col].set_xlabel(_axis_label(option))
-    axes[0, 0].set_ylabel("peak response amplitude (mm)")
+    axes[0, 0].set_ylabel("vibration amplitude at\nresonance, harmonic 1 (mm)")
     axes[1, 0].set_ylabel("resonance frequency (Hz)")
     for col, p in enumerate(fams):
         amps = [
-            c.amp_mm[c.peak_index]
+            c.h1_mm[c.h1_peak_index]
             for c in cases
-            if c.peak_index >= 0 and abs(c.phase_deg - p) < 1e-9
+            if c.h1_peak_index >= 0 and abs(c.phase_deg - p) < 1e-9
         ]
         if _wants_log(amps, 30.0):
             axes[0, col].set_yscale("log")
@@ -204,7 +204,7 @@ def plot_cone_angle_energy(
                 ms=10,
                 mew=2,
             )
-    energies = [c.energy_mj[c.peak_index].sum() for c in cones if c.peak_index >= 0]
+    energies = [c.energy_mj[c.h1_peak_index].sum() for c in cones if c.h1_peak_index >= 0]
     if _wants_log(energies, 30.0):
         a1.set_yscale("log")
         _readable_log(a1, "y")

@@ -14,6 +14,7 @@ from pathlib import Path
 from ..post.results import StudyResults, family_name
 from ..post.tables import Table, families, slug, sweep_curves, sweep_table
 from . import study_figures as sf
+from .palette import verdict_caption, verdict_counts
 from .section_builder import _Builder, _failures, _fam_slug, _forces_text
 
 
@@ -53,8 +54,9 @@ def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
     b.figure(
         sec,
         f"sweep_{osl}",
-        f"Peak response amplitude (mm, top) and resonance frequency (Hz, bottom) vs "
-        f"{name} ({unit}); one column per family, one curve per damper." + _failures(r.cases),
+        f"Vibration amplitude at resonance, harmonic 1 (mm, top) and resonance frequency "
+        f"(Hz, bottom) vs {name} ({unit}); one column per family, one curve per damper; "
+        "hollow marker: unstable peak, half filled: unknown." + _failures(r.cases),
         lambda path: sf.plot_sweep(r.cases, option, path),
     )
     b.table(
@@ -89,7 +91,8 @@ def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
                 sec,
                 f"sweep_{osl}_design_rule",
                 f"The design rule across the {name} sweep: nonlinear peak growth "
-                f"A({pts[0]['f_top_n']:g} N)/A({pts[0]['f_ref_n']:g} N) (filled) and "
+                f"A({pts[0]['f_top_n']:g} N)/A({pts[0]['f_ref_n']:g} N), A = max |x(t)|, "
+                "(filled) and "
                 "the coupling screen's prediction (open) against k2/k (left); friction "
                 "energy per cycle at the largest force against k2/k (middle); the "
                 "nonlinear growth against the screen's saturation force over the "
@@ -139,7 +142,14 @@ def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
                 b.figure(
                     rec,
                     f"sweep_{osl}_receptance_{_fam_slug(p)}_{slug(d)}_{f:g}N",
-                    f"{d} damper, {family_name(p)}, F = {f:g} N: receptance (mm/N) for "
-                    f"every value of {option}." + _failures(own),
+                    f"{d} damper, {family_name(p)}, F = {f:g} N: receptance, harmonic-1 "
+                    f"amplitude / F (mm/N), for every value of {option}; "
+                    f"{verdict_caption(_counts(own))}." + _failures(own),
                     lambda path, cs=own: sf.plot_sweep_receptances(cs, option, path),
                 )
+
+
+def _counts(cases) -> dict[int, int]:
+    import numpy as np
+
+    return verdict_counts(np.concatenate([c.branch.stability for c in cases]))

@@ -16,8 +16,8 @@ import numpy as np
 
 from ..post.results import family_name
 from .common import pyplot, save_figure
+from .palette import damper_color
 
-DAMPER_COLORS = {"cone": "#1f6fb4", "cylinder": "#2ca02c", "wedge": "#d62728"}
 QUANTITIES = (
     ("peak_amplitude_mm", "peak amplitude, mm"),
     ("peak_frequency_hz", "resonance frequency, Hz"),
@@ -26,7 +26,8 @@ QUANTITIES = (
 
 
 def _color(d: str, k: int = 0) -> str:
-    return DAMPER_COLORS.get(d, f"C{k}")
+    """The damper's colour of every figure (render/palette.py); ``k`` is unused."""
+    return damper_color(d)
 
 
 def _families(results: dict[tuple, dict]) -> list[float]:

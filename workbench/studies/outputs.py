@@ -37,7 +37,11 @@ def write_outputs(
 
     write_study_peaks(results, out, prepared, {c.digest: c.model_digest for c in plan(spec)})
     rows = results.summaries()
-    write_json(out / "summary.json", rows)
+    # summary.json: each case's row and the inputs its solve used, each with unit and source
+    write_json(
+        out / "summary.json",
+        [{**r, "inputs": c.inputs} for r, c in zip(rows, results.cases, strict=True)],
+    )
     if results.extras.get("screen"):
         write_rows_csv(out / "screen.csv", results.extras["screen"])
     if rows:
@@ -51,7 +55,7 @@ def write_outputs(
 
         sections += nlmode_sections(results.extras["nlmodes"], out)
     write_manifest_and_report(
-        out, spec, f"{spec.kind} study,", headline(results), timings, sections
+        out, spec, f"{spec.kind} study,", headline(results), timings, sections, results=results
     )
 
 
@@ -62,12 +66,36 @@ def write_manifest_and_report(
     summary: list[str],
     timings: dict[str, float],
     sections: list[dict],
+    *,
+    results: StudyResults | None = None,
 ) -> None:
-    """``manifest.json`` (see render/report.py for its layout) and ``report.html``."""
-    from ..post.inputs import used_inputs
+    """``manifest.json`` (see render/report.py for its layout) and ``report.html``.
+
+    With ``results`` the Inputs table is what the solve of its cases recorded
+    (:func:`workbench.post.inputs.study_inputs`) and the manifest carries the
+    machine's load during the cases; without, the study's options resolved
+    from the files (:func:`workbench.post.inputs.used_inputs`).
+    """
+    import os
+
+    from ..post.inputs import study_inputs, used_inputs
     from ..render.report import write_report
     from ..versions import software_versions
 
+    inputs = (
+        study_inputs(results.cases, spec.as_dict(), spec.source)
+        if results is not None
+        else used_inputs(spec.as_dict(), spec.source)
+    )
+    loads = [
+        c.inputs["load_average"]["value"]
+        for c in (results.cases if results is not None else [])
+        if "load_average" in c.inputs
+    ]
+    try:
+        loads.append(round(os.getloadavg()[0], 2))  # and now, writing the report
+    except OSError:
+        pass
     manifest = {
         "title": f"Study '{spec.name}'",
         "subtitle": subtitle,
@@ -75,9 +103,10 @@ def write_manifest_and_report(
         "summary": summary,
         "inputs": spec.as_dict(),
         "sources": spec.source,
-        "inputs_used": used_inputs(spec.as_dict(), spec.source),
+        "inputs_used": inputs,
         "versions": software_versions(),
         "timings": timings,
+        "machine": {"cpus": os.cpu_count() or 1, "load": loads},
         "sections": sections,
     }
     write_json(out / "manifest.json", manifest)
@@ -100,34 +129,41 @@ def _geometry_dirs(out: Path) -> dict[str, Path]:
 
 
 def headline(results: StudyResults) -> list[str]:
-    """One line per damper and family: the peak response over the forces.
+    """One line per damper and family: the vibration at the highest force.
 
-    A case whose curve did not reach its resonance is named with its lower
-    bound, never given as a peak.
+    The harmonic-1 amplitude at resonance, with max |x(t)| and the mean term
+    at that point. A case whose curve did not reach its resonance is named
+    with its lower bound, never given as a peak.
     """
+    from ..post.answer import mean_text
+    from ..post.tables import energy_floor, energy_text, num
+
+    floor = energy_floor([c.summary()["h1_friction_energy_mj"] or 0.0 for c in results.cases])
     lines = []
     for d in results.dampers:
         for ph in results.phases:
             cs = results.select(damper=d, phase_deg=ph)
-            ok = [c for c in cs if c.peak_index >= 0]
+            ok = [c for c in cs if c.h1_peak_index >= 0]
             if not ok:
                 continue
-            top = max(ok, key=lambda c: (c.force_n, -float(c.amp_mm[c.peak_index])))
+            top = max(ok, key=lambda c: (c.force_n, -float(c.h1_mm[c.h1_peak_index])))
             s = top.summary()
             # a sweep has several cases per damper and force: name the one quoted
             which = f" ({top.variant.replace('=', ' = ')})" if top.variant else ""
-            if not top.peak_covered:
+            if not top.h1_peak_covered:
                 lines.append(
                     f"{d}, {top.family}{which}: at {top.force_n:g} N the resonance was NOT "
-                    "reached; "
-                    f"the peak is at least {s['peak_lower_bound_mm']:.4g} mm (lower bound: "
-                    f"{top.peak_note()})"
+                    f"reached; the vibration amplitude (harmonic 1) is at least "
+                    f"{num(s['h1_lower_bound_mm'], 4)} mm (lower bound: {top.peak_note()})"
                 )
                 continue
+            energy = energy_text(s["h1_friction_energy_mj"], floor)
             lines.append(
-                f"{d}, {top.family}{which}: at {top.force_n:g} N the peak is "
-                f"{s['peak_amplitude_mm']:.4g} mm at {s['peak_frequency_hz']:.2f} Hz, "
-                f"friction energy {s['friction_energy_mj']:.3g} mJ per cycle"
+                f"{d}, {top.family}{which}: at {top.force_n:g} N the vibration amplitude "
+                f"(harmonic 1) is {num(s['h1_amplitude_mm'], 4)} mm at "
+                f"{s['h1_peak_frequency_hz']:.1f} Hz (max |x(t)| {num(s['h1_max_abs_mm'], 4)} mm, "
+                f"mean {mean_text(s['h1_mean_mm'], s['h1_max_abs_mm'])} mm), friction energy per "
+                "cycle " + (energy if energy[0].isalpha() else f"{energy} mJ")
             )
     short = results.uncovered()
     if short:

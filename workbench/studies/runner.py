@@ -137,17 +137,9 @@ def geometry_request(case: Case) -> dict[str, Any]:
 
 def contact_params_for(case: Case):
     from ..assembly.params import load_contact_params
+    from ..post.provenance import contact_args  # the layers the report names, one mapping
 
-    s = case.settings
-    return load_contact_params(
-        geometry_file=s.get("geometry"),
-        mu=s.get("mu"),
-        cf_n=s.get("cf"),
-        kt_line_n_per_m2=s.get("kt-line"),
-        kn_line_n_per_m2=s.get("kn-line"),
-        kt_face_n_per_m3=s.get("kt-face"),
-        kn_face_n_per_m3=s.get("kn-face"),
-    )
+    return load_contact_params(**contact_args(case.settings))
 
 
 def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> PreparedModel:
@@ -259,6 +251,7 @@ def solve_case(prep: PreparedModel, case: Case) -> CaseResult:
     """The frequency response of one case (never raises for a failed solve)."""
     from ..hbm.continuation import frequency_response
     from ..hbm.options import SolverOptions
+    from ..post.provenance import solve_inputs  # the inputs, read from the objects used
 
     s = case.settings
     t0 = time.perf_counter()
@@ -278,8 +271,7 @@ def solve_case(prep: PreparedModel, case: Case) -> CaseResult:
         output_names=(f"blade{blade}_x",),
         label=case.name,
     )
-    timings = dict(prep.timings)
-    timings["hbm"] = time.perf_counter() - t0
+    timings = {**prep.timings, "hbm": time.perf_counter() - t0}
     return CaseResult(
         damper=case.damper,
         phase_deg=case.phase_deg,
@@ -291,6 +283,7 @@ def solve_case(prep: PreparedModel, case: Case) -> CaseResult:
         params={**case.settings, "band_hz": list(band)},
         digest=case.digest,
         timings=timings,
+        inputs=solve_inputs(prep, s, branch, opts),
     )
 
 

@@ -166,7 +166,7 @@ SHAPE = DamperShape(
     fit_blame=fit_blame,
     hit_blame=hit_blame,
     draw=draw,
-    style=("#1f6fb4", "-", "o"),
+    style=("#0072B2", "-", "o"),  # Okabe-Ito blue (workbench/render/palette.py)
     study_options={
         "points-per-line": ("n_contact_points", int),
         "cone-angle": ("semi_angle_deg", float),

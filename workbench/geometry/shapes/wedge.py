@@ -194,7 +194,7 @@ SHAPE = DamperShape(
     fit_blame=fit_blame,
     hit_blame=hit_blame,
     draw=draw,
-    style=("#b8860b", ":", "^"),
+    style=("#009E73", "-.", "^"),  # Okabe-Ito bluish green (render/palette.py)
     order=3,
     description="a prism along y, contact over one face on each platform",
 )
