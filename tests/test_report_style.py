@@ -61,28 +61,36 @@ def test_the_figures_read_the_palette():
     assert sf.damper_style("wedge") == palette.damper_style("wedge")
 
 
-def test_a_new_verdict_is_one_row(monkeypatch, unknowns):
-    """The lead's "carried" verdicts: one more row of VERDICTS reaches the legends, the
-    captions and the tables without another edit."""
+def test_carried_verdicts_are_shown_as_carried(unknowns):
+    """Verdicts carried from checked neighbours (codes 2 and 3, workbench.hbm.stability_path)
+    reach the legends, the captions and the tables under their own name, never as plain
+    stable or unstable: each is one row of VERDICTS."""
     from workbench.post.tables import cases_table
 
-    carried = palette.Verdict(7, "stable (carried)", (0, (6, 1)), None, "full", False, "dash")
-    monkeypatch.setattr(palette, "VERDICTS", (*palette.VERDICTS, carried))
     c = unknowns.cases[0]
-    c.branch.stability[20:30] = 7
+    c.branch.stability[20:30] = 2
+    c.branch.stability[30:33] = 3
     t = cases_table(unknowns)
-    assert "stable (carried) points" in t.header
     assert t.column("stable (carried) points")[0] == "10"
+    assert t.column("unstable (carried) points")[0] == "3"
     fig = sf.plot_receptances(unknowns.select(damper="cone", phase_deg=0.0), None)
-    assert any(s.startswith("stable (carried) (10 points)") for s in _legend_texts(fig))
-    assert "stable (carried) dash (10 points)" in palette.verdict_caption(
-        palette.verdict_counts(c.branch.stability)
-    )
+    texts = _legend_texts(fig)
+    assert any(s.startswith("stable (carried) (10 points)") for s in texts), texts
+    assert any(s.startswith("unstable (carried) (3 points)") for s in texts), texts
+    cap = palette.verdict_caption(palette.verdict_counts(c.branch.stability))
+    assert "stable (carried) long dashes (10 points)" in cap, cap
+    assert "unstable (carried) dash-dot (3 points)" in cap, cap
+    # a carried piece is drawn with its own line style, not the checked verdict's
+    styles = {v.code: v.ls for v in palette.VERDICTS}
+    assert len(set(map(str, styles.values()))) == len(styles)
 
 
 def test_verdict_runs_join_and_the_doubtful_end_wins():
     runs = palette.verdict_runs(np.array([1, 1, -1, 1, 0, 0, 1]))
     assert runs == [(slice(0, 2), 1), (slice(1, 4), -1), (slice(3, 7), 0)]
+    # carried verdicts: a piece touching a carried point is carried; unstable outweighs all
+    runs = palette.verdict_runs(np.array([1, 2, 2, 1, 3, 0]))
+    assert runs == [(slice(0, 4), 2), (slice(3, 5), 3), (slice(4, 6), 0)]
     assert palette.verdict_runs(np.array([], int)) == []
 
 

@@ -18,7 +18,8 @@ here, so a colour means one thing in every figure of every report:
   keeps the order.
 * **a stability verdict** (:data:`VERDICTS`): one row per code of a
   branch's ``stability`` array (:mod:`workbench.hbm.stability`: 1 stable,
-  0 unstable, -1 unknown) with its word, its line style where colour names
+  0 unstable, -1 unknown, 2 and 3 stable and unstable carried from checked
+  neighbours) with its word, its line style where colour names
   the force, its band where line style names the damper, and the fill of
   a peak marker. Drawing, legends, captions and tables all read this
   table, so a new kind of verdict is one more row.
@@ -149,7 +150,32 @@ VERDICTS: tuple[Verdict, ...] = (
         words="dotted",
         band_words="on a beaded grey band",
     ),
+    # carried from checked neighbours (workbench.hbm.stability_path): not established at
+    # the point, drawn as their verdict with a break in the line
+    Verdict(
+        2,
+        "stable (carried)",
+        (0, (7, 1.5)),
+        dict(color="0.7", alpha=0.2, **_BAND),
+        "left",
+        always=False,
+        words="long dashes",
+        band_words="on a faint band",
+    ),
+    Verdict(
+        3,
+        "unstable (carried)",
+        (0, (5, 2, 1, 2)),
+        dict(color="0.55", alpha=0.2, **_BAND),
+        "right",
+        always=False,
+        words="dash-dot",
+        band_words="on a faint grey band",
+    ),
 )
+# how much a verdict weighs where a piece of line joins two points of different verdicts: the
+# piece is drawn with the heavier one (an unstable point shows even between stable ones)
+SEVERITY = {1: 0, 2: 1, -1: 2, 3: 3, 0: 4}
 
 
 def verdict(code: int) -> Verdict:
@@ -173,10 +199,11 @@ def verdict_runs(codes: Sequence[int] | np.ndarray) -> list[tuple[slice, int]]:
     """Split a branch into runs of one verdict for drawing: ``[(slice, code), ...]``.
 
     A run ends on the first point of the next one, so the drawn pieces join
-    into one unbroken line; a segment takes the verdict of its second end
-    takes its first end's verdict, or its second end's when the first is
-    stable: a piece between a stable and an unstable (or unknown) point is
-    drawn unstable (unknown), so one such point shows as a piece of line.
+    into one unbroken line; a piece between two points takes the heavier of
+    their verdicts (:data:`SEVERITY`: stable, stable carried, unknown,
+    unstable carried, unstable): a piece between a stable and an unstable
+    (or unknown, or carried) point is drawn so, and one such point shows as
+    a piece of line.
     """
     c = np.asarray(codes, dtype=int)
     n = c.size
@@ -185,7 +212,8 @@ def verdict_runs(codes: Sequence[int] | np.ndarray) -> list[tuple[slice, int]]:
     if n == 1:
         return [(slice(0, 1), int(c[0]))]
     a, b = c[:-1], c[1:]
-    seg = np.where(a == 1, b, a)  # the first end's verdict, unless it is stable
+    rank = np.vectorize(lambda k: SEVERITY.get(int(k), 2))
+    seg = np.where(rank(b) > rank(a), b, a)  # the heavier verdict of the two ends
     runs, start = [], 0
     for i in range(1, seg.size + 1):
         if i == seg.size or seg[i] != seg[start]:

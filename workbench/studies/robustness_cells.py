@@ -160,8 +160,9 @@ def _describe(rec: dict[str, Any]) -> dict[str, Any]:
     tp = turning_points(f)
     rec["n_turning_points"] = int(tp.size)
     rec["turning_points_hz"] = [round(float(f[j]), 4) for j in tp]
-    v = np.asarray(rec["stability"], dtype=int)  # Hill's verdicts: 1, 0, -1 (unknown)
+    v = np.asarray(rec["stability"], dtype=int)  # Hill's: 1, 0, -1 (unknown), 2/3 carried
     rec["n_unstable"] = int(np.sum(v == 0))
+    rec["n_unstable_carried"] = int(np.sum(v == 3))
     rec["n_stability_unknown"] = int(np.sum(v < 0))
     rec["succeeded"] = bool(not rec["failed"] and rec["completed"])
     return rec
