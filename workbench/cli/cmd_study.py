@@ -78,6 +78,12 @@ def _run(spec, out: Path, args: argparse.Namespace) -> dict:
         "n_reused": results.extras.get("n_reused"),
         "peak_not_reached": [c.case_id for c in results.uncovered()],
         "timings_s": {k: round(v, 2) for k, v in results.timings.items()},
+        # the cases' schedule: each rank's busy time and busy / (ranks x wall)
+        "schedule": {
+            k: (round(v, 3) if isinstance(v, float) else v)
+            for k, v in (results.extras.get("schedule") or {}).items()
+            if k != "records"
+        },
         "cases": results.summaries(),
     }
     check_failures(results, summary)

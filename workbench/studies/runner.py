@@ -37,7 +37,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..io import digest, write_json
-from ..log import bars_enabled, progress_bar
+from ..log import bars_enabled
 from ..post.results import CaseResult, StudyResults
 from .outputs import check_failures, headline, write_manifest_and_report, write_outputs
 from .plan import Case, plan
@@ -287,13 +287,6 @@ def solve_case(prep: PreparedModel, case: Case) -> CaseResult:
     )
 
 
-def _cost(case: Case, prepared: dict[str, PreparedModel]) -> float:
-    """A rough relative cost for the ETA and for spreading cases over ranks."""
-    p = prepared.get(case.model_digest)
-    n = 3 * (p.assembled.n_pairs if p else 46) * (2 * len(case.settings["harmonics"]) - 1)
-    return (n / 1000.0) ** 2 + 0.2
-
-
 def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> StudyResults:
     """Compute every case of ``spec`` (resuming from ``out``) and write results and report."""
     out = Path(out)
@@ -332,44 +325,54 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         for k, v in prepared[md].timings.items():
             timings[k] = timings.get(k, 0.0) + v
 
-    # 2. cases: spread over the ranks by estimated cost (largest first)
-    order = sorted(todo, key=lambda c: -_cost(c, prepared))
-    mine = [c for i, c in enumerate(order) if i % size == rank]
+    # the linear coupling screen of every model (cached beside the cases): its slip onsets
+    # tell the schedule which cases slip, and the report shows it
+    from .schedule import case_cost, run_tasks, schedule_efficiency
+    from .screening import study_screens
+
+    t_scr = time.perf_counter()
+    screen_rows = study_screens(cases, prepared, out, spec.phases, max(spec.forces), comm=comm)
+    timings["coupling screen"] = time.perf_counter() - t_scr
+
+    # 2. cases: handed out costliest first to whichever rank is free (a shared counter)
+    order = sorted(todo, key=lambda c: -case_cost(c, prepared.get(c.model_digest), screen_rows))
     failures: list[str] = []
     if todo:
         log.info(
-            "%d of %d cases to compute (%d cached)%s",
-            len(todo),
-            len(cases),
-            len(cases) - len(todo),
-            f", {len(mine)} on rank {rank}" if size > 1 else "",
+            "%d of %d cases to compute (%d cached)", len(todo), len(cases), len(cases) - len(todo)
         )
     t_cases = time.perf_counter()
-    with progress_bar(f"{spec.name}: cases", total=len(mine), unit="case") as bar:
-        for k, c in enumerate(mine):
-            bar.set_postfix_str(f"{k + 1}/{len(mine)} {c.name}")
-            res = solve_case(prepared[c.model_digest], c)
-            res.save(case_dir / f"{c.digest}.h5")
-            if res.branch.failed:
-                failures.append(f"{c.name}: {res.branch.message}")
-                log.warning(
-                    "case %s stopped early: %s (its %d points are kept)",
-                    c.name,
-                    res.branch.message,
-                    res.branch.n_points,
-                )
-            elif not res.peak_covered:
-                log.warning("case %s: %s", c.name, res.peak_note())
-            bar.update(1)
-            if not bars_enabled():
-                log.info(
-                    "case %d/%d done: %s (%d points, %.1f s)",
-                    k + 1,
-                    len(mine),
-                    c.name,
-                    res.branch.n_points,
-                    res.timings["hbm"],
-                )
+
+    def work(k: int) -> dict[str, Any]:
+        c = order[k]
+        res = solve_case(prepared[c.model_digest], c)
+        res.save(case_dir / f"{c.digest}.h5")
+        if res.branch.failed:
+            failures.append(f"{c.name}: {res.branch.message}")
+            log.warning(
+                "case %s stopped early: %s (its %d points are kept)",
+                c.name,
+                res.branch.message,
+                res.branch.n_points,
+            )
+        elif not res.peak_covered:
+            log.warning("case %s: %s", c.name, res.peak_note())
+        if not bars_enabled():
+            log.info(
+                "case %d/%d done: %s (%d points, %.1f s)",
+                k + 1,
+                len(order),
+                c.name,
+                res.branch.n_points,
+                res.timings["hbm"],
+            )
+        return {"case": c.name, "points": int(res.branch.n_points)}
+
+    records = run_tasks(len(order), work, comm, desc=f"{spec.name}: cases") if order else []
+    schedule = schedule_efficiency(records, size)
+    if records and size > 1:  # each rank's busy time, in the report's cost table too
+        for q, busy in enumerate(schedule["busy_per_rank_s"]):
+            timings[f"cases: rank {q} busy"] = busy
     timings["cases (wall)"] = time.perf_counter() - t_cases
     # one picture set per damper, of the first model of that damper in plan order (a sweep
     # prepares several models of one damper: the report shows the first, so the others need
@@ -399,12 +402,6 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
     if comm is not None:
         failures = sum(comm.allgather(failures), [])
         comm.Barrier()
-    # the linear coupling screen of every model (cached beside the cases)
-    from .screening import study_screens
-
-    t_scr = time.perf_counter()
-    screen_rows = study_screens(cases, prepared, out, spec.phases, max(spec.forces), comm=comm)
-    timings["coupling screen"] = time.perf_counter() - t_scr
     nl_res = _nonlinear_modes(spec, out, prepared, cases, comm, timings)
 
     # 3. gather, post-process and report on rank 0
@@ -432,6 +429,9 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
         }
         results.extras["failures"] = failures
         results.extras["screen"] = screen_rows
+        results.extras["schedule"] = schedule
+        if records:  # who computed what, when: the load balance of the cases
+            write_json(out / "schedule.json", {**schedule, "records": records})
         if nl_res is not None:
             results.extras["nlmodes"] = nl_res
         results.extras["n_computed"] = len(todo)

@@ -80,6 +80,13 @@ from ..post.uncertainty import (
     stats_rows,
 )
 from .plan import make_case
+from .schedule import (
+    WorkCounter,
+    run_tasks,
+    schedule_efficiency,
+    simulate_schedule,
+    study_comm,
+)
 from .spec import StudySpec
 from .uq_samples import (
     Sample,
@@ -89,13 +96,6 @@ from .uq_samples import (
     prepare_sample,
     sample_settings,
     study_distributions,
-)
-from .uq_schedule import (
-    WorkCounter,
-    run_tasks,
-    schedule_efficiency,
-    simulate_schedule,
-    study_comm,
 )
 
 log = logging.getLogger(__name__)
@@ -468,7 +468,7 @@ def write_uncertainty_outputs(
     write_manifest_and_report(out, spec, "uncertainty study,", headline(a), timings, sections)
 
 
-# moved to post/uncertainty.py and studies/uq_schedule.py; kept importable from here
+# moved to post/uncertainty.py and studies/schedule.py; kept importable from here
 __all__ = [
     "DIST_KINDS",
     "INPUTS",

@@ -1,9 +1,13 @@
-"""Spreading independent tasks over MPI ranks: a shared counter, its records, their efficiency.
+"""Spreading independent tasks over MPI ranks: one schedule for every study kind.
 
 :func:`run_tasks` hands task indices to whichever rank is free (an MPI
 one-sided ``Fetch_and_op`` on rank 0's window) or round-robin
 (``static``); :func:`schedule_efficiency` and :func:`simulate_schedule`
-measure and model the result. Used by the uncertainty study.
+measure and model the result. The comparison and sweep studies hand out
+their cases costliest first (:func:`case_cost`, an estimate that knows
+whether the damper slips at the case's force); the uncertainty study its
+samples. (The fidelity and robustness studies run in one process: they
+compare timings.)
 """
 
 from __future__ import annotations
@@ -145,6 +149,34 @@ def simulate_schedule(costs: list[float], ranks: int, *, static: bool) -> float:
         end = max(end, t)
         heapq.heappush(free, t)
     return end
+
+
+def case_cost(case, prepared, screen_rows: list[dict[str, Any]] | None = None) -> float:
+    """A rough relative cost of a case: what its harmonic balance costs, for the schedule.
+
+    The unknowns ``N = 3 pairs (2 harmonics - 1)`` set the cost of a point
+    (``N^2``: the Jacobian's factorisation and the contact maps); a damper
+    that slips at the case's force costs about 3.5 times one that stays
+    stuck (measured on the paper-like rig's curves: the stuck curves take the
+    linear verdict at every point and a few Newton iterations, the slipping
+    ones Hill's method along the slipping stretch and many more iterations).
+    Whether it slips: the case's force against the slip onset the coupling
+    screen found for its model and phase (``screen_rows``); without a screen
+    row, assumed to slip.
+    """
+    n_pairs = prepared.assembled.n_pairs if prepared is not None else 46
+    n = 3 * n_pairs * (2 * len(case.settings["harmonics"]) - 1)
+    base = (n / 1000.0) ** 2 + 0.2
+    rows = [
+        r
+        for r in screen_rows or []
+        if r.get("damper") == case.damper
+        and (r.get("variant") or "") == (case.variant or "")
+        and abs(float(r.get("phase_deg", np.nan)) - case.phase_deg) < 1e-9
+    ]
+    # a row's f_slip_n None means the screen found no slip at any force (JSON has no inf)
+    slips = not rows or (rows[0].get("f_slip_n") is not None and case.force_n > rows[0]["f_slip_n"])
+    return base * (3.5 if slips else 1.0)
 
 
 def study_comm():
