@@ -51,6 +51,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("UPD_NO_PROGRESS", "1")
@@ -59,7 +61,10 @@ sys.path.insert(0, str(Path(__file__).parent))
 import pyharm_compare  # noqa: E402
 
 CASES = ("sdof", "sdof200", "two_dof", "pairs46", "pairs146", "pyharm")
-TARGETS_S = {"sdof": 1.0, "sdof200": 1.0, "pairs46": 10.0, "pairs146": 60.0}
+# issue 28's targets (s, with stability, on the 2-core reference machine); the stability must
+# also be under a quarter of each curve's time (STABILITY_SHARE)
+TARGETS_S = {"sdof": 1.0, "sdof200": 1.0, "pairs46": 3.0, "pairs146": 30.0}
+STABILITY_SHARE = 0.25
 
 
 def make_case(name: str):
@@ -129,6 +134,9 @@ def run_case(name: str, profile: bool) -> dict:
         "ms_per_factorisation": round(1e3 * st["t_per_factor"], 3),
         "t_corrector_s": round(st["t_snes"], 3),
         "t_stability_s": round(tm.get("stability", 0.0), 3),
+        "stability_share": round(tm.get("stability", 0.0) / max(wall, 1e-12), 3),
+        "hill_checks": int(np.sum(b.stability_how == 1)),
+        "carried": int(np.sum(b.carried)),
         "t_post_s": round(tm.get("post", 0.0), 3),
         "t_peak_s": round(tm.get("peak", 0.0), 3),
         "failed_steps": st["n_failed"],
@@ -169,6 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     if "pyharm" in names:
         names.remove("pyharm")
         cmp_row = pyharm_compare.run(args.pyharm_python)
+        cmp_row["whole"] = pyharm_compare.whole_process(args.pyharm_python)
     for name in names:
         r = run_case(name, args.profile)
         rows.append(r)
@@ -176,8 +185,12 @@ def main(argv: list[str] | None = None) -> int:
             ""
             if r["target_s"] is None
             else (
-                "  (target {:g} s: {})".format(
-                    r["target_s"], "met" if r["wall_s"] < r["target_s"] else "MISSED"
+                "  (target {:g} s: {}; stability {:.0%} of it, target < {:.0%}: {})".format(
+                    r["target_s"],
+                    "met" if r["wall_s"] < r["target_s"] else "MISSED",
+                    r["stability_share"],
+                    STABILITY_SHARE,
+                    "met" if r["stability_share"] < STABILITY_SHARE else "MISSED",
                 )
             )
         )
@@ -198,6 +211,8 @@ def main(argv: list[str] | None = None) -> int:
         "ms_per_factorisation",
         "t_corrector_s",
         "t_stability_s",
+        "stability_share",
+        "hill_checks",
         "completed",
         "load_before",
     ]

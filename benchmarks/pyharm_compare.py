@@ -193,6 +193,9 @@ def report(row: dict) -> None:
         pts = sum(r["points"] for r in p["levels"])
         print(f"{'pyHarm':7s} {p['label']:19s} {p['cpu_s']:7.3f} {pts:6d} {p['amp_err']:9.1e} "
               f"{p['omega_err']:8.1e} {p['amp_err_all']:8.1e} |")  # fmt: skip
+    for w in (row.get("whole") or {}).get("rows", []):
+        print(f"whole process, {w['nt']} samples: {w['tool']:6s} {w['label']:34s} "
+              f"cpu {w['cpu_s']:7.3f} s  worst peak error {w['amp_err']:.1e}")  # fmt: skip
     d0, p0 = row["ours"][0], ph["sweep"][0]
     print(f"defaults against defaults: ours {d0['cpu_s']:.3f} s, pyHarm {p0['cpu_s']:.3f} s: "
           f"pyHarm/ours {p0['cpu_s'] / d0['cpu_s']:.2f} (peak errors {d0['amp_err']:.1e} and "
@@ -246,3 +249,108 @@ def plot(row: dict, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+# ---- whole process: `upd frf` against a pyHarm script, each started from the shell ----------
+WHOLE_NT = (128, 1024)
+OURS_WHOLE = {  # label: [solver] keys of the model file (upd frf --no-figures)
+    "default": {},
+    "peak bracket 1e-2": {"peak_ftol": 0.01},
+    "peak bracket 1e-2, stability off": {"peak_ftol": 0.01, "stability": False},
+}
+PYHARM_WHOLE_DS = (0.1, 0.003)  # its default, and the step that reaches 1e-4
+
+
+def _model_file(folder: Path, nt: int, solver: dict) -> Path:
+    """The unit Jenkins oscillator as an ``upd frf`` model file (the five levels)."""
+    np.savez(folder / "unit_jenkins.npz", M=np.eye(1), K=np.eye(1), C=0.02 * np.eye(1))
+    lines = [
+        "[model]", 'matrices = "unit_jenkins.npz"', 'mass = "M"', 'stiffness = "K"',
+        'damping = "C"', 'length_unit = "1"', "", "[excitation]", "dofs = [0]",
+        "amplitudes_n = [1.0]", "phases_deg = [0.0]",
+        f"levels = [{', '.join(f'{v:g}' for v in LEVELS)}]", "", "[band]",
+        f"start_hz = {EXAMPLE.band_hz[0]!r}", f"end_hz = {EXAMPLE.band_hz[1]!r}", "", "[hbm]",
+        f"harmonics = [{', '.join(str(h) for h in HARMONICS)}]", f"nt = {nt}", "", "[output]",
+        "dofs = [0]", 'names = ["x"]', "", "[[contact]]", "dofs = [0]", "mu = 1.0",
+        "kt_n_per_m = 20.0", "n0_n = 1.0", "", "[solver]",
+        *(f"{k} = {str(v).lower() if isinstance(v, bool) else v!r}" for k, v in solver.items()),
+    ]  # fmt: skip
+    path = folder / f"unit_jenkins_{nt}.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _child_cpu(cmd: list[str], cwd: Path, env: dict) -> tuple[float, str]:
+    """(user + system CPU of the child process, its stdout)."""
+    import resource
+
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    out = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, env=env, timeout=3600)
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if out.returncode != 0:
+        raise RuntimeError(f"{cmd[0]} failed: {out.stderr.strip().splitlines()[-1:]}")
+    return (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime), out.stdout
+
+
+def whole_process(pyharm_python: str | None, rounds: int = 3) -> dict:
+    """Whole-process CPU (start to exit, imports and output included; compiled kernels cached)
+    of ``upd frf --no-figures`` and of a pyHarm script doing the same five curves, each
+    setting run ``rounds`` times alternating between the tools, the least kept; the worst
+    peak error of each run against the same discretisation solved to convergence."""
+    import sys
+
+    env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", UPD_NO_PROGRESS="1")
+    env.pop("PYTHONPATH", None)
+    upd = str(Path(sys.executable).with_name("upd"))
+    py = (
+        pyharm_python
+        or env.get("PYHARM_PYTHON")
+        or str(Path(__file__).resolve().parents[1] / ".venv-bench" / "bin" / "python")
+    )
+    have_pyharm = Path(py).is_file()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        for nt in WHOLE_NT:
+            ref = [(r["peak_amplitude"], r["peak_omega"]) for r in _ours(
+                nt=nt, stability=False, ds_max=0.02, peak_ftol=1e-8, peak_iterations=80
+            )["levels"]]  # fmt: skip
+            runs: dict[tuple[str, str], list[float]] = {}
+            errs: dict[tuple[str, str], float] = {}
+            for _ in range(rounds):
+                for label, solver in OURS_WHOLE.items():
+                    folder = tmp / f"ours_{nt}_{len(runs)}"
+                    folder.mkdir(exist_ok=True)
+                    model = _model_file(folder, nt, solver)
+                    cpu, _ = _child_cpu(
+                        [upd, "frf", str(model), "--no-figures", "-q", "--json",
+                         "--out", str(folder / "out")], folder, env)  # fmt: skip
+                    summ = json.loads((folder / "out" / "summary.json").read_text())
+                    got = [dict(peak_amplitude=c["peak_amplitude"],
+                                peak_omega=TWO_PI * c["peak_frequency_hz"])
+                           for c in summ["curves"]]  # fmt: skip
+                    runs.setdefault(("ours", label), []).append(cpu)
+                    errs[("ours", label)] = errors(dict(levels=got), ref)["amp_err"]
+                if have_pyharm:
+                    for ds in PYHARM_WHOLE_DS:
+                        cmd = [py, str(Path(__file__).with_name("pyharm_jenkins.py")), "--whole",
+                               "--levels", ",".join(f"{v:g}" for v in LEVELS),
+                               "--nh", str(max(HARMONICS)), "--nti", str(nt),
+                               "--band", ",".join(f"{v:g}" for v in BAND_RAD_S),
+                               "--ds-max", f"{ds:g}"]  # fmt: skip
+                        cpu, text = _child_cpu(cmd, tmp, env)
+                        got = json.loads(text.strip().splitlines()[-1])["levels"]
+                        key = ("pyHarm", f"ds_max {ds:g}")
+                        runs.setdefault(key, []).append(cpu)
+                        errs[key] = errors(dict(levels=got), ref)["amp_err"]
+            for (tool, label), cpus in runs.items():
+                rows.append(dict(nt=nt, tool=tool, label=label, cpu_s=min(cpus),
+                                 amp_err=errs[(tool, label)]))  # fmt: skip
+    return dict(rows=rows, pyharm=have_pyharm, note="" if have_pyharm else f"no pyHarm at {py}")
+
+
+def cheapest(rows: list[dict], tool: str, max_err: float, nt: int | None = None) -> dict | None:
+    """The cheapest run of ``tool`` with a worst peak error <= ``max_err`` (None if none)."""
+    ok = [r for r in rows if r.get("tool", tool) == tool and r["amp_err"] <= max_err
+          and (nt is None or r.get("nt") == nt)]  # fmt: skip
+    return min(ok, key=lambda r: r["cpu_s"]) if ok else None

@@ -2,7 +2,10 @@
 
 Parts (``--parts``, default all, in this order):
 
+    main-job    benchmarks/main_job.py: both studies of ``make run``, cold, on 2 MPI ranks,
+                timed, and their answers against benchmarks/reference/
     hbm         benchmarks/bench_hbm.py: harmonic balance curves (single DOF to 146 pairs)
+                and the comparison with pyHarm (solve time and whole process)
     nlmodes     benchmarks/bench_nlmodes.py: 6 nonlinear modes + synthesis against 42 curves
     fe          benchmarks/bench_fe.py: meshing, assembly, eigen solve and reduction
                 against the number of DOFs, serial and on 2 ranks (the longest part)
@@ -16,8 +19,10 @@ Parts (``--parts``, default all, in this order):
 Each part writes into its own folder under ``--out`` and its console output
 to ``<part>.log`` there; ``summary.json`` records the exit code and wall
 time of each part. A part that fails does not stop the others; the exit
-code is non-zero if any failed. The studies resume from their caches, so
-an interrupted ``make bench`` continues where it stopped.
+code is non-zero if any failed. At the end issue 28's speed targets are
+printed beside the figures of this run (benchmarks/targets.py). The
+studies resume from their caches, so an interrupted ``make bench``
+continues where it stopped (the main job starts cold each time).
 
     .venv/bin/python benchmarks/run_all.py --out results/bench
     .venv/bin/python benchmarks/run_all.py --parts hbm,fidelity --out /tmp/bench
@@ -36,13 +41,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 PY = sys.executable
 UPD = str(Path(PY).with_name("upd"))
-PARTS = ("hbm", "nlmodes", "fe", "slow-tests", "fidelity", "robustness", "runup")
+PARTS = ("main-job", "hbm", "nlmodes", "fe", "slow-tests", "fidelity", "robustness", "runup")
 
 
 def command(part: str, out: Path) -> list[str]:
     """The command line of one part, writing into ``out / part``."""
     d = str(out / part)
     return {
+        "main-job": [PY, str(ROOT / "benchmarks" / "main_job.py"), "--out", d],
         "hbm": [PY, str(ROOT / "benchmarks" / "bench_hbm.py"), "--out", d],
         "nlmodes": [PY, str(ROOT / "benchmarks" / "bench_nlmodes.py"), "--out", d],
         "fe": [PY, str(ROOT / "benchmarks" / "bench_fe.py"), "--out", d],
@@ -103,6 +109,10 @@ def main(argv: list[str] | None = None) -> int:
         )
         with open(args.out / "summary.json", "w") as f:
             json.dump(summary, f, indent=2)
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import targets
+
+    targets.report(args.out)
     bad = [p for p, s in summary.items() if s["exit_code"] != 0]
     if bad:
         print("failed parts: " + ", ".join(bad) + " (see their logs)", file=sys.stderr)
