@@ -13,8 +13,17 @@ from typing import Any
 # Branch datasets (workbench.hbm.branch); "L" is the model's length unit
 BRANCH_UNITS: dict[str, tuple[str, str]] = {
     "freq_hz": ("Hz", "excitation frequency of each point, in continuation order"),
-    "stable": ("1", "Hill stability of each point (True: stable; unknown counts as not)"),
-    "stability": ("1", "Hill stability of each point: 1 stable, 0 unstable, -1 unknown"),
+    "stable": ("1", "True only for an established stable verdict (Hill or linear)"),
+    "stability": (
+        "1",
+        "Hill stability of each point: 1 stable, 0 unstable, -1 unknown, 2/3 stable/unstable "
+        "carried from checked neighbours",
+    ),
+    "stability_how": (
+        "1",
+        "how the verdict was obtained: 0 not computed, 1 Hill at the point, 2 every contact "
+        "stuck (linear), 3 carried",
+    ),
     "accuracy": ("1", "loop energy against harmonic contact work, over the excitation work"),
     "out_rms": ("L", "RMS of y(t) over the period, per output"),
     "newton_its": ("1", "Newton iterations of the corrector"),
