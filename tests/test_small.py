@@ -119,3 +119,22 @@ def test_who_takes_the_compiled_path():
     el = ContactElements.from_dofs(2, [[0]], mu=1.0, kt=5.0, n0=1.0)
     hb2 = HarmonicBalance(System(M=M, K=K, C=C, contacts=el), np.array([1.0, 0]), f, [0])
     assert hb2.lin.kind == "direct" and not eligible(hb2, SolverOptions())
+
+
+# slow: numba compiles the kernels just in time (about a minute per law when not cached)
+@pytest.mark.slow
+def test_the_just_in_time_kernels_are_the_ahead_of_time_ones(monkeypatch):
+    """The JIT fallback (kernels edited since the module was built) gives the same branch as
+    the ahead-of-time module, when there is one (else it is what the other tests ran)."""
+    from workbench.hbm import small, small_aot
+
+    ex = two_dof_contact()
+    run = dict(harmonics=tuple(range(6)), nt=128)
+    aot = frequency_response(ex.system, ex.f1, 3.0, ex.band_hz, ex.outputs, **run)
+    monkeypatch.setattr(small_aot, "load", lambda law, what="solve": None)
+    small._jit.clear()
+    jit = frequency_response(ex.system, ex.f1, 3.0, ex.band_hz, ex.outputs, **run)
+    assert jit.stats["mode"] == aot.stats["mode"] == "compiled"
+    assert jit.n_points == aot.n_points
+    np.testing.assert_array_equal(jit.newton_its, aot.newton_its)
+    np.testing.assert_allclose(jit.x, aot.x, rtol=0, atol=1e-12 * np.abs(aot.x).max())

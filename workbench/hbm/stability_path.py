@@ -14,9 +14,12 @@ and carried between, and every point says which (``how``):
   later stuck point is stable with the same largest real part: established,
   not carried.
 * ``HOW_HILL``, checked at the point: the first point, the first point of
-  every stretch where some contact slips or separates, and then ahead of
-  the least-damped exponent: with ``m`` the largest real part over ``w`` at
-  the last two checks of the stretch, the next check comes at half the
+  every stretch where some contact slips, every point where some contact
+  opens during the period (the contact Jacobian jumps where samples open
+  and close, and the exponents with it: on the heavy rig's wedge in phase
+  an exponent of +101 1/s appears for three points between two checks at
+  -4 1/s), and then ahead of the least-damped exponent: with ``m`` the
+  largest real part over ``w`` at the last two checks of the stretch, the next check comes at half the
   distance (in points) at which ``m`` extrapolates to the imaginary axis,
   at least the next point, at most ``stability_stride`` points on (the next
   point after an unknown verdict or a change of verdict). When the branch
@@ -147,7 +150,7 @@ class StabilityPath:
             if st.verdict == STABLE:  # a damped linear system: every stuck point is too
                 self.linear = st
             return st.verdict, st.max_real, HOW_HILL
-        if force or not self.stretch or k >= self.due:
+        if force or not self.stretch or k >= self.due or self._separates(ev):
             st = self.check(ev)
             self._schedule(k, st, ev.omega)
             return st.verdict, st.max_real, HOW_HILL
@@ -160,6 +163,12 @@ class StabilityPath:
             return True
         nonlin, _ = hb.element_classes(ev)
         return nonlin.size == 0
+
+    @staticmethod
+    def _separates(ev) -> bool:
+        """Some contact opens during the period: checked at every such point (the contact
+        Jacobian jumps where samples open and close, and the exponents with it)."""
+        return ev.aft is not None and bool(np.any(ev.aft.n_sep))
 
     def _schedule(self, k: int, st: Stability, omega: float) -> None:
         """The call index of the next check of this non-linear stretch, after a check at ``k``."""

@@ -145,43 +145,61 @@ def study_backbones(
         for (md, _ph), cs in groups.items():
             if md not in prepared and not files(cs)[2]:
                 prepared[md] = prepare_model(cs[0], out, comm=comm)
+    ndir.mkdir(parents=True, exist_ok=True)
+
+    def label_of(c0: Case) -> str:
+        return f"{c0.damper}, {family_name(c0.phase_deg)}" + (
+            f" [{c0.variant}]" if c0.variant else ""
+        )
+
+    def compute(md: str, cs: list[Case]) -> dict[str, Any]:
+        """One backbone, computed and written to its cache files."""
+        c0 = cs[0]
+        h5, npz, _ = files(cs)
+        t0 = time.perf_counter()
+        log.info("backbone %s: computing", label_of(c0))
+        if md not in prepared:
+            prepared[md] = prepare_model(c0, out)
+        nm, f1, band = family_backbone(
+            prepared[md], c0, relative_range, n_steps, forces=[c.force_n for c in cs]
+        )
+        nm.timings["wall"] = time.perf_counter() - t0
+        nm.save(h5)
+        from ..io import atomic_path
+
+        with atomic_path(npz) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, f1=f1, band=np.asarray(band, float))
+        log.info(
+            "backbone %s: %d points, %.1f s (%s)",
+            label_of(c0),
+            nm.n_points,
+            nm.timings["total"],
+            nm.message,
+        )
+        return {"backbone": label_of(c0)}
+
+    # the backbones still to compute, handed out to the ranks (the largest models first)
+    todo = [(md, cs) for (md, _ph), cs in groups.items() if not files(cs)[2]]
+    if comm is not None and comm.size > 1 and todo:
+        from .schedule import run_tasks
+
+        todo.sort(key=lambda t: -getattr(getattr(prepared.get(t[0]), "assembled", None),
+                                         "n_pairs", 0))  # fmt: skip
+        run_tasks(len(todo), lambda k: compute(*todo[k]), comm, desc="backbones")
     if comm is not None and comm.rank != 0:
         return {"rows": [], "backbones": [], "timings": {}}
-    ndir.mkdir(parents=True, exist_ok=True)
     rows: list[dict[str, Any]] = []
     backbones: list[dict[str, Any]] = []
     timings: dict[str, float] = {}
     for (md, _ph), cs in groups.items():
         c0 = cs[0]
         h5, npz, cached = files(cs)
-        label = f"{c0.damper}, {family_name(c0.phase_deg)}" + (
-            f" [{c0.variant}]" if c0.variant else ""
-        )
-        if cached:
-            nm = NlModeBranch.load(h5)
-            with np.load(npz) as z:
-                f1, band = z["f1"], tuple(float(v) for v in z["band"])
-        else:
-            t0 = time.perf_counter()
-            log.info("backbone %s (%d of %d): computing", label, len(backbones) + 1, len(groups))
-            if md not in prepared:
-                prepared[md] = prepare_model(c0, out)
-            nm, f1, band = family_backbone(
-                prepared[md], c0, relative_range, n_steps, forces=[c.force_n for c in cs]
-            )
-            nm.timings["wall"] = time.perf_counter() - t0
-            nm.save(h5)
-            from ..io import atomic_path
-
-            with atomic_path(npz) as tmp, open(tmp, "wb") as fh:
-                np.savez(fh, f1=f1, band=np.asarray(band, float))
-            log.info(
-                "backbone %s: %d points, %.1f s (%s)",
-                label,
-                nm.n_points,
-                nm.timings["total"],
-                nm.message,
-            )
+        label = label_of(c0)
+        if not cached:
+            compute(md, cs)
+        nm = NlModeBranch.load(h5)
+        with np.load(npz) as z:
+            f1, band = z["f1"], tuple(float(v) for v in z["band"])
         t_nm = float(nm.timings.get("total", 0.0))
         timings[label] = t_nm
         backbones.append(
