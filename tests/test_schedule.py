@@ -70,7 +70,11 @@ def test_the_paper_rig_curves_keep_both_ranks_busy():
         }.items()
     ]  # fmt: skip
     pairs = {"wedge": 146, "cone": 46, "cylinder": 46}
-    cases = [(_case(d, p, f), t) for (d, p), ts in measured.items() for f, t in zip(forces, ts)]
+    cases = [
+        (_case(d, p, f), t)
+        for (d, p), ts in measured.items()
+        for f, t in zip(forces, ts, strict=True)
+    ]
     order = sorted(cases, key=lambda ct: -case_cost(ct[0], _prep(pairs[ct[0].damper]), screen))
     costs = [t for _, t in order]
     dynamic = simulate_schedule(costs, 2, static=False)

@@ -19,8 +19,9 @@ and carried between, and every point says which (``how``):
   and close, and the exponents with it: on the heavy rig's wedge in phase
   an exponent of +101 1/s appears for three points between two checks at
   -4 1/s), and then ahead of the least-damped exponent: with ``m`` the
-  largest real part over ``w`` at the last two checks of the stretch, the next check comes at half the
-  distance (in points) at which ``m`` extrapolates to the imaginary axis,
+  largest real part over ``w`` at the last two checks of the stretch, the
+  next check comes at half the distance (in points) at which ``m``
+  extrapolates to the imaginary axis,
   at least the next point, at most ``stability_stride`` points on (the next
   point after an unknown verdict or a change of verdict). When the branch
   is done: both band ends, the peaks of ``|y(t)|`` and of the harmonic-1
