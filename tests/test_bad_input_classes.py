@@ -579,6 +579,7 @@ def _path_arguments() -> list[tuple[str, list[str]]]:
     for command in ("frf", "nlmodes", "study", "screen"):
         out.append((f"{command} FILE", [command, f"f{FF}.toml"]))
     out.append(("report DIR", ["report", f"r{FF}"]))
+    out.append(("report --screenshot", ["report", "r", "--screenshot", f"s{FF}.png"]))
     for command in ("mesh", "modes", "reduce", "study", "screen", "nlmodes"):
         out.append((f"{command} --geometry", ["--geometry", f"g{FF}.toml"]))
     for command in ("modes", "reduce"):
@@ -589,7 +590,7 @@ def _path_arguments() -> list[tuple[str, list[str]]]:
 @pytest.mark.parametrize("label, args", _path_arguments(), ids=[i for i, _ in _path_arguments()])
 def test_a_name_that_is_not_utf8_is_refused_naming_it(tmp_path, monkeypatch, label, args):
     command, what = label.split()
-    if what in ("FILE", "DIR"):
+    if what in ("FILE", "DIR") or label == "report --screenshot":
         argv = args
         (tmp_path / args[1]).write_text("x = 1\n") if what == "FILE" else None
     else:
