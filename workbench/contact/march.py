@@ -106,10 +106,10 @@ def _march_py(
                     # the law's derivatives are sparse: only their non-zero entries are used,
                     # on the active columns and force rows only
                     for a in range(3):
-                        for c in range(m):
-                            dfb[a, j, c] = 0.0
-                        if not active[e, a]:
+                        if not active[e, a]:  # never read: J's row is zero
                             continue
+                        for i in range(nc):  # the other columns are never read
+                            dfb[a, j, cols[i]] = 0.0
                         for k in range(ns):
                             fak = Fs[a, k]
                             if fak != 0.0:

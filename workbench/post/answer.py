@@ -139,8 +139,20 @@ def confidence(results: StudyResults, rows: dict[float, list[AnswerRow]]) -> lis
     allc = np.concatenate([c.branch.stability for c in results.cases]) if results.cases else []
     counts = verdict_counts(np.asarray(allc, dtype=int))
     words = ", ".join(f"{counts.get(v.code, 0)} {v.label}" for v in verdicts_shown(counts))
-    sentence = f"Stability (Hill's method) of the {int(sum(counts.values()))} computed points: "
-    sentence += words + "."
+    sentence = f"Stability of the {int(sum(counts.values()))} computed points: {words}"
+    hows = (
+        np.concatenate([c.branch.stability_how for c in results.cases])
+        if results.cases
+        else np.zeros(0, int)
+    )
+    n_hill, n_lin, n_car = (int(np.sum(hows == k)) for k in (1, 2, 3))
+    if n_lin or n_car:  # how each verdict was obtained (workbench/hbm/stability_path.py)
+        sentence += (
+            f" (Hill's method at {n_hill} points; {n_lin} with every contact stuck take the "
+            f"linear system's verdict; {n_car} carry the verdict of the checked points around "
+            "them)"
+        )
+    sentence += "."
     doubtful = [
         f"{r.damper} {r.case.family} ({verdict_label(r.verdict)})"
         for rs in rows.values()
