@@ -4,9 +4,8 @@ One picture set per damper, of the first model of that damper in plan
 order (a sweep prepares several models of one damper: the report shows the
 first, so the others need no stuck-mode solve); made also when every case
 came from the cache, so a resumed study's report has the pictures an
-uninterrupted one has. Under MPI each rank draws whole dampers alone (one
-full FE modes solve each, the dampers handed out from the study's shared
-counter) instead of all ranks sharing every solve.
+uninterrupted one has. Under MPI every rank takes part in each damper's
+FE modes solve and rank 0 draws.
 """
 
 from __future__ import annotations
@@ -25,14 +24,8 @@ def study_pictures(cases, prepared: dict, out: Path, comm, cached_costs: dict) -
     when any was drawn. Collective under MPI.
     """
     from .runner import contact_params_for, load_geometry
-    from .schedule import run_tasks
 
     firsts = [c for i, c in enumerate(cases) if c.damper not in {x.damper for x in cases[:i]}]
-    own = comm
-    if comm is not None and comm.size > 1:
-        from mpi4py import MPI
-
-        own = MPI.COMM_SELF
 
     def picture(k: int) -> dict[str, Any]:
         c = firsts[k]
@@ -40,15 +33,14 @@ def study_pictures(cases, prepared: dict, out: Path, comm, cached_costs: dict) -
         geom, cparams = (
             (prep.geometry, prep.contact_params)
             if prep is not None
-            else (load_geometry(c, out, comm=own), contact_params_for(c))
+            else (load_geometry(c, out), contact_params_for(c))
         )
-        return {"damper": c.damper, "cost": model_pictures(geom, cparams, out, comm=own)}
+        return {"damper": c.damper, "cost": model_pictures(geom, cparams, out, comm=comm)}
 
-    pics = (
-        run_tasks(len(firsts), picture, comm, desc="model pictures")
-        if own is not comm
-        else [picture(k) for k in range(len(firsts))]
-    )
+    # every rank takes part in each damper's modes (collective FE): a rank solving alone on
+    # its own communicator leaves PETSc objects that its exit then cleans up collectively,
+    # which the other rank never joins (a hang at exit, seen with PETSc 3.18)
+    pics = [picture(k) for k in range(len(firsts))]
     made = False
     for r in pics:
         if r["cost"] is None:

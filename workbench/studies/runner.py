@@ -366,7 +366,7 @@ def run_study(spec: StudySpec, out: str | Path, *, force: bool = False) -> Study
                 res.branch.n_points,
                 res.timings["hbm"],
             )
-        return {"case": c.name, "points": int(res.branch.n_points)}
+        return {"case": res.case_id, "points": int(res.branch.n_points)}
 
     records = run_tasks(len(order), work, comm, desc=f"{spec.name}: cases") if order else []
     schedule = schedule_efficiency(records, size)
