@@ -261,6 +261,11 @@ OURS_WHOLE = {  # label: [solver] keys of the model file (upd frf --no-figures)
 PYHARM_WHOLE_DS = (0.1, 0.003)  # its default, and the step that reaches 1e-4
 
 
+def _toml(v) -> str:
+    """A TOML value (booleans lower case)."""
+    return str(v).lower() if isinstance(v, bool) else repr(v)
+
+
 def _model_file(folder: Path, nt: int, solver: dict) -> Path:
     """The unit Jenkins oscillator as an ``upd frf`` model file (the five levels)."""
     np.savez(folder / "unit_jenkins.npz", M=np.eye(1), K=np.eye(1), C=0.02 * np.eye(1))
@@ -273,7 +278,7 @@ def _model_file(folder: Path, nt: int, solver: dict) -> Path:
         f"harmonics = [{', '.join(str(h) for h in HARMONICS)}]", f"nt = {nt}", "", "[output]",
         "dofs = [0]", 'names = ["x"]', "", "[[contact]]", "dofs = [0]", "mu = 1.0",
         "kt_n_per_m = 20.0", "n0_n = 1.0", "", "[solver]",
-        *(f"{k} = {str(v).lower() if isinstance(v, bool) else v!r}" for k, v in solver.items()),
+        *(f"{k} = {_toml(v)}" for k, v in solver.items()),
     ]  # fmt: skip
     path = folder / f"unit_jenkins_{nt}.toml"
     path.write_text("\n".join(lines) + "\n")

@@ -445,3 +445,31 @@ def test_an_empty_selection_gives_no_second_opinion():
     assert second_opinion(np.array([2.0 + 10j]), none, w, 1e-6) == ""
     assert second_opinion(none, np.array([2.0 + 10j]), w, 1e-6) == ""
     assert "disagree" in second_opinion(np.array([-2.0]), np.array([2.0 + 10j]), w, 1e-6)
+
+
+def test_the_band_end_is_reached_by_smaller_steps_when_the_guess_fails():
+    """A step that passed the band end across a kink: Newton from the interpolated guess and
+    from the step's own solution fails at the band end; frequency steps from the last point,
+    halved while they fail, still put the last point exactly on it (the CF sweep's cylinder
+    at 5 kN needed this)."""
+    from types import SimpleNamespace
+
+    from workbench.hbm.continuation import _band_end
+
+    class Stub:  # the solution is x = w^2; Newton converges only from a guess whose own
+        force_refresh = False  # frequency sqrt(x0) lies at most 0.3 rad/s below the one asked
+
+        def __init__(self):
+            self.calls = []
+
+        def solve_natural(self, x0, w):
+            w0 = float(np.sqrt(x0[0]))
+            ok = 0.0 <= w - w0 <= 0.3
+            self.calls.append((w0, w, ok))
+            return SimpleNamespace(converged=ok, x=np.array([w * w]), its=3, reason="stub")
+
+    corr = Stub()
+    end = _band_end(corr, np.array([100.0]), 10.0, np.array([144.0]), 12.0, 11.0)
+    assert end.converged and end.x[0] == 121.0
+    assert not any(ok for _, _, ok in corr.calls[:3])  # interpolated (twice), then the step's
+    assert all(w <= 11.0 for _, w, _ in corr.calls)

@@ -475,12 +475,7 @@ def _arclength(
             continue
         turns = 0
         if res.omega > w1:
-            theta = (w1 - w) / (res.omega - w)
-            guess = x + theta * (res.x - x)
-            end = corr.solve_natural(guess, w1)
-            if not end.converged:  # once more with a fresh LU
-                corr.force_refresh = True
-                end = corr.solve_natural(guess, w1)
+            end = _band_end(corr, x, w, res.x, res.omega, w1)
             if not end.converged:
                 raise _Stop(
                     f"the branch passed the band end but the corrector failed at exactly "
@@ -502,6 +497,33 @@ def _arclength(
             corr.force_refresh = True
         factor = 2.0 if res.its == 0 else np.clip(np.sqrt(opts.target_newton / res.its), 0.5, 2.0)
         ds = float(np.clip(ds * factor, opts.ds_min, opts.ds_max))
+
+
+def _band_end(corr: Corrector, x: np.ndarray, w: float, xn: np.ndarray, wn: float, w1: float):
+    """The solution exactly at the band end ``w1``, between the last point (x, w) and the
+    step (xn, wn) that passed it: from the interpolated guess (with the current LU, then a
+    fresh one), then from the step's own solution, then by frequency steps from the last
+    point (halved while they fail). Returns the last corrector result tried."""
+    theta = (w1 - w) / (wn - w)
+    end = corr.solve_natural(x + theta * (xn - x), w1)
+    for guess in (x + theta * (xn - x), xn):
+        if end.converged:
+            return end
+        corr.force_refresh = True
+        end = corr.solve_natural(guess, w1)
+    xc, wc, dw = x, w, w1 - w
+    while not end.converged and dw > 1e-3 * (w1 - w):  # a stick/slip kink before the end
+        wt = min(wc + dw, w1)
+        corr.force_refresh = True
+        trial = corr.solve_natural(xc, wt)
+        if trial.converged:
+            xc, wc = trial.x, wt
+            if wt >= w1:
+                return trial
+        else:
+            dw *= 0.5
+            end = trial
+    return end
 
 
 def _stepping(
