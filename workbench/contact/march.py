@@ -64,7 +64,6 @@ def _march_py(
     n_el, nt, _ = u.shape
     nh = E.shape[1]
     m = 3 * nh
-    cols = np.zeros(m, dtype=np.int64)  # the active columns (direction b, harmonic h) of e
     s = np.zeros(ns)
     s_new = np.zeros(ns)
     s_start = np.zeros(ns)
@@ -83,12 +82,16 @@ def _march_py(
         ds[:, :] = 0.0
         # only the directions whose displacement can vary carry derivatives: an inactive
         # direction's displacement is zero and its force acts on nothing (a zero row of W)
-        nc = 0
+        # the columns from the first active direction's block to the last one's: an
+        # inactive direction between them keeps zero columns (nothing feeds them)
+        lo, hi = m, 0
         for b in range(3):
             if active[e, b]:
-                for h in range(nh):
-                    cols[nc] = b * nh + h
-                    nc += 1
+                lo = min(lo, b * nh)
+                hi = max(hi, (b + 1) * nh)
+        # unsigned bounds: indices the compiler knows are not negative (no wrap-around
+        # test in the inner loops, which then vectorise)
+        ulo, uhi = np.uint64(lo), np.uint64(max(hi, lo))
         p = 0
         same = False
         while p < max_periods:
@@ -104,17 +107,17 @@ def _march_py(
                 f[e, j, 2] = fj[2]
                 if want_jac:
                     # the law's derivatives are sparse: only their non-zero entries are used,
-                    # on the active columns and force rows only
+                    # on the active directions' column blocks and force rows only (contiguous
+                    # inner loops over the harmonics, which the compiler vectorises)
                     for a in range(3):
                         if not active[e, a]:  # never read: J's row is zero
                             continue
-                        for i in range(nc):  # the other columns are never read
-                            dfb[a, j, cols[i]] = 0.0
+                        for c in range(ulo, uhi):
+                            dfb[a, j, c] = 0.0
                         for k in range(ns):
                             fak = Fs[a, k]
                             if fak != 0.0:
-                                for i in range(nc):
-                                    c = cols[i]
+                                for c in range(ulo, uhi):
                                     dfb[a, j, c] += fak * ds[k, c]
                         for b in range(3):
                             fab = Fu[a, b]
@@ -122,13 +125,12 @@ def _march_py(
                                 for h in range(nh):
                                     dfb[a, j, b * nh + h] += fab * E[j, h]
                     for a in range(ns):
-                        for i in range(nc):
-                            ds_new[a, cols[i]] = 0.0
+                        for c in range(ulo, uhi):
+                            ds_new[a, c] = 0.0
                         for k in range(ns):
                             sak = Ss[a, k]
                             if sak != 0.0:
-                                for i in range(nc):
-                                    c = cols[i]
+                                for c in range(ulo, uhi):
                                     ds_new[a, c] += sak * ds[k, c]
                         for b in range(3):
                             sab = Su[a, b]
@@ -136,8 +138,7 @@ def _march_py(
                                 for h in range(nh):
                                     ds_new[a, b * nh + h] += sab * E[j, h]
                     for a in range(ns):
-                        for i in range(nc):
-                            c = cols[i]
+                        for c in range(ulo, uhi):
                             ds[a, c] = ds_new[a, c]
                 for k in range(ns):
                     s[k] = s_new[k]
@@ -168,18 +169,18 @@ def _march_py(
             for a in range(3):
                 if not active[e, a]:
                     J[e, a] = 0.0
-                elif nc == m:
+                elif lo == 0 and hi == m:
                     J[e, a] = np.dot(P, dfb[a])
-                else:  # the active columns only (the others are zero)
+                else:  # the columns lo..hi only (the others are zero)
                     J[e, a] = 0.0
-                    sub = np.empty((nt, nc))
+                    sub = np.empty((nt, hi - lo))
                     for j in range(nt):
-                        for i in range(nc):
-                            sub[j, i] = dfb[a, j, cols[i]]
+                        for c in range(lo, hi):
+                            sub[j, c - lo] = dfb[a, j, c]
                     Ja = np.dot(P, sub)
                     for h in range(nh):
-                        for i in range(nc):
-                            J[e, a, h, cols[i]] = Ja[h, i]
+                        for c in range(lo, hi):
+                            J[e, a, h, c] = Ja[h, c - lo]
 
 
 def march(
