@@ -121,8 +121,8 @@ def _rig_wedge():
     m = wb.model("wedge", geometry=str(ROOT / "geometry" / "paper_rig.toml"), out=RIG_MODELS)
     prep = m.prepared
     from workbench.hbm import SolverOptions
+    from workbench.pipeline import band_for
     from workbench.studies.plan import make_case
-    from workbench.studies.runner import band_for
 
     case = make_case("wedge", 180.0, 30.0, m.settings)
     band = band_for(prep, case)

@@ -16,11 +16,10 @@ from workbench.errors import InputError
 from workbench.studies.fidelity import (
     Setting,
     pareto_front,
-    parse_harmonics,
     pick_cheapest,
     propose_combination,
 )
-from workbench.studies.spec import resolve
+from workbench.studies.spec import parse_harmonics, resolve
 
 # ---- Pareto front ---------------------------------------------------------------------------
 

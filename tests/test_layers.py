@@ -98,3 +98,96 @@ def test_nonlinear_mode_sources_do_not_key_the_forced_responses():
         for node in ast.walk(tree):
             if isinstance(node, ast.ImportFrom) and node.module and node.level == 1:
                 assert node.module.split(".")[0] not in stems, (n, node.module)
+
+
+# ---- no import cycle in the package (issue 30) ----------------------------------------------
+def import_graph(pkg: Path) -> dict[str, set[str]]:
+    """module -> the package's modules it imports (imports inside functions included).
+
+    A package is the module of its ``__init__.py``; an import of ``a.b.name``
+    where ``name`` is not a module counts as an import of ``a.b``. A module's
+    imports of its own parent packages do not count (Python imports them first
+    anyway, and they hold no code of the module's concept).
+    """
+    mods: dict[str, Path] = {}
+    for p in sorted(pkg.rglob("*.py")):
+        parts = p.relative_to(pkg.parent).with_suffix("").parts
+        mods[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = p
+
+    def resolve(m: str) -> str:
+        while m and m not in mods:
+            m = m.rpartition(".")[0]
+        return m
+
+    graph: dict[str, set[str]] = {m: set() for m in mods}
+    for m, p in mods.items():
+        name = m + ".__init__" if p.name == "__init__.py" else m
+        for _, t in imported_modules(p.read_text(), name):
+            r = resolve(t)
+            if r and r != m and not m.startswith(r + "."):
+                graph[m].add(r)
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on.add(root)
+        while work:
+            v, it = work[-1]
+            w = next(it, None)
+            if w is not None:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(graph[w]))))
+                elif w in on:
+                    low[v] = min(low[v], index[w])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[v])
+            if low[v] == index[v]:
+                comp = []
+                while True:
+                    w = stack.pop()
+                    on.discard(w)
+                    comp.append(w)
+                    if w == v:
+                        break
+                if len(comp) > 1:
+                    out.append(sorted(comp))
+    return out
+
+
+def test_no_import_cycle_in_the_package():
+    found = cycles(import_graph(PKG))
+    assert not found, "import cycles (each a set of modules that import each other):\n" + "\n".join(
+        ", ".join(c) for c in found
+    )
+
+
+def test_the_cycle_check_finds_a_cycle_through_a_function_level_import(tmp_path):
+    """A check of the check: a cycle closed only by an import inside a function is found,
+    a chain is not."""
+    pkg = tmp_path / "pkg"
+    (pkg / "sub").mkdir(parents=True)
+    (pkg / "__init__.py").write_text("")
+    (pkg / "sub" / "__init__.py").write_text("")
+    (pkg / "a.py").write_text("from .sub import b\n")
+    (pkg / "sub" / "b.py").write_text("def f():\n    from ..c import g\n    return g\n")
+    (pkg / "c.py").write_text("X = 1\n")
+    assert cycles(import_graph(pkg)) == []
+    (pkg / "c.py").write_text("def g():\n    from . import a\n    return a\n")
+    assert cycles(import_graph(pkg)) == [["pkg.a", "pkg.c", "pkg.sub.b"]]

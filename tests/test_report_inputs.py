@@ -8,7 +8,7 @@ import pytest
 
 from workbench.post.inputs import used_inputs
 from workbench.render.report import render_html
-from workbench.studies.runner import headline
+from workbench.studies.outputs import headline
 from workbench.studies.spec import load_study
 
 ROOT = Path(__file__).resolve().parents[1]

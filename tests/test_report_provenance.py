@@ -72,10 +72,10 @@ def _prepared(case, contact_params):
 
 def _study(tmp_path: Path, geo: Path):
     from workbench.hbm.options import SolverOptions
+    from workbench.pipeline import contact_params_for
     from workbench.post.provenance import solve_inputs
     from workbench.post.results import StudyResults
     from workbench.studies.plan import plan
-    from workbench.studies.runner import contact_params_for
     from workbench.studies.spec import load_study
 
     spec = load_study(

@@ -65,7 +65,7 @@ def test_carried_verdicts_are_shown_as_carried(unknowns):
     """Verdicts carried from checked neighbours (codes 2 and 3, workbench.hbm.stability_path)
     reach the legends, the captions and the tables under their own name, never as plain
     stable or unstable: each is one row of VERDICTS."""
-    from workbench.post.tables import cases_table
+    from workbench.post.answer import cases_table
 
     c = unknowns.cases[0]
     c.branch.stability[20:30] = 2
@@ -98,7 +98,7 @@ def test_verdict_runs_join_and_the_doubtful_end_wins():
 
 
 def test_unknown_verdicts_in_legends_tables_and_captions(unknowns, tmp_path):
-    from workbench.post.tables import cases_table
+    from workbench.post.answer import cases_table
     from workbench.render.sections import build_sections
 
     cone = unknowns.select(damper="cone", phase_deg=0.0)

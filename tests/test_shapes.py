@@ -103,9 +103,9 @@ def rod(tmp_path, monkeypatch):
 
 
 def test_a_new_shape_module_is_found_without_other_edits(rod):
+    from workbench.pipeline import geometry_request
     from workbench.render.study_style import damper_style
     from workbench.studies.plan import Case
-    from workbench.studies.runner import geometry_request
 
     assert shapes.names() == ("cone", "cylinder", "wedge", "rod")
     gp = load_geometry_params("rod")  # its TOML, through the registry's record

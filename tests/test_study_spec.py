@@ -109,7 +109,7 @@ def test_shipped_study_files_load_and_every_case_fits_the_groove(path):
     """
     from workbench.geometry.layout import make_layout
     from workbench.geometry.params import load_geometry_params
-    from workbench.studies.runner import geometry_request
+    from workbench.pipeline import geometry_request
 
     spec = load_study(path)
     cases = plan(spec)

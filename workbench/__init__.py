@@ -9,6 +9,7 @@ The sub-packages follow the data flow::
     contact   -> node-to-node 3-D friction law, vectorised
     hbm       -> AFT, residual/Jacobian, SNES corrector, continuation, Hill
     assembly  -> rig + damper + contact pairs + preload + excitation
+    pipeline  -> a case's model (geometry -> fe -> assembly, cached) and its curve
     studies   -> study TOML runner: cases, cache, resume, MPI
     post      -> receptances, energies, contact status, tables
     render    -> pyvista / matplotlib figures and the HTML report

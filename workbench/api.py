@@ -99,8 +99,8 @@ def model(damper: str = "cone", *, out: str | Path = "results/notebook", **optio
     ``kt_line=6e10`` (N/m per m), ``damping=0.002``. Solve options
     (``harmonics``, ``nt``, ...) given here become the defaults of :func:`frf`.
     """
+    from .pipeline import prepare_model
     from .studies.plan import plan
-    from .studies.runner import prepare_model
     from .studies.spec import resolve
 
     values = _options(options)
@@ -122,8 +122,8 @@ def frf(m: Model, force_n: float, phase_deg: float = 180.0, **options: Any):
     ``receptance_mm_per_n``, ``energy_mj``, ``summary()``, ``branch``).
     """
     from .errors import check_range
+    from .pipeline import solve_case
     from .studies.plan import MODEL_KEYS, make_case
-    from .studies.runner import solve_case
     from .studies.spec import BY_NAME, check_option
 
     values = _options(options)

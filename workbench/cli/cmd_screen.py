@@ -64,7 +64,7 @@ def run(args: argparse.Namespace, ctx) -> dict:
     from ..log import mpi_rank
     from ..post.screen_table import table
     from ..post.tables import write_rows_csv
-    from ..studies.runner import _comm
+    from ..studies.schedule import world_comm as _comm
     from ..studies.screening import run_screen
     from ..studies.spec import cli_values, load_study
 

@@ -53,7 +53,8 @@ def run(args: argparse.Namespace, ctx) -> dict:
 
 
 def _run(spec, out: Path, args: argparse.Namespace) -> dict:
-    from ..studies.runner import check_failures, run_study
+    from ..studies.outputs import check_failures
+    from ..studies.runner import run_study
 
     if spec.kind == "fidelity":  # knob ladders against a reference, Pareto front, --tolerance
         from ..studies.fidelity import run_fidelity

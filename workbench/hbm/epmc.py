@@ -3,7 +3,8 @@
 :class:`Epmc` works on every DOF of the reduced model;
 :class:`~.epmc_condensed.EpmcCondensed` (its own module) on the contact
 displacements and the followed mode (modal damping only), and converts its
-solution to the same mass normalisation; :func:`make_problem` picks one.
+solution to the same mass normalisation; :func:`.nlmodes.make_problem` picks
+one.
 The equations are given in :mod:`.nlmodes`, which continues the points
 into a backbone.
 """
@@ -336,32 +337,3 @@ class Epmc:
             lost=self.lost_contact(res),
             phi1=p1,
         )
-
-
-def make_problem(
-    system: System,
-    fourier: Fourier,
-    mode: int,
-    outputs: object = None,
-    dc_anchor: float = 1e-3,
-    space: str = "auto",
-):
-    """:class:`EpmcCondensed` when the damping is modal and the contacts see fewer
-    coordinates than the model has ("auto"), else :class:`Epmc` (all DOFs)."""
-    from ..errors import check_choice
-    from .epmc_condensed import EpmcCondensed
-
-    check_choice("space", space, ("auto", "condensed", "physical"))
-    if space == "physical" or not system.n_el:
-        return Epmc(system, fourier, mode, outputs, dc_anchor)
-    n_s = int(system.contacts.active.sum())
-    modal = system.C is None
-    if not modal:
-        from .linear import ModalLinear
-
-        _, modal = ModalLinear.is_modal(system.M, system.regularised_stiffness(), system.C)
-    if space == "condensed" or (modal and n_s + 1 < system.n):
-        if not modal:
-            raise InputError("space", space, "physical (the damping is not modal)")
-        return EpmcCondensed(system, fourier, mode, outputs, dc_anchor)
-    return Epmc(system, fourier, mode, outputs, dc_anchor)

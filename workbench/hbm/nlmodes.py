@@ -54,9 +54,9 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from ..errors import InputError, check_int, check_range
+from ..errors import InputError, check_choice, check_int, check_range
 from .balance import observation
-from .epmc import TWO_PI, Epmc, make_problem
+from .epmc import TWO_PI, Epmc
 from .epmc_condensed import EpmcCondensed
 from .fourier import Fourier
 from .nlmode_branch import POINT_ARRAYS, NlModeBranch
@@ -75,6 +75,33 @@ __all__ = [
     "pick_mode",
     "slip_amplitude",
 ]
+
+
+# -- the problem: every DOF or condensed onto the contacts -------------------------------
+def make_problem(
+    system: System,
+    fourier: Fourier,
+    mode: int,
+    outputs: object = None,
+    dc_anchor: float = 1e-3,
+    space: str = "auto",
+):
+    """:class:`EpmcCondensed` when the damping is modal and the contacts see fewer
+    coordinates than the model has ("auto"), else :class:`Epmc` (all DOFs)."""
+    check_choice("space", space, ("auto", "condensed", "physical"))
+    if space == "physical" or not system.n_el:
+        return Epmc(system, fourier, mode, outputs, dc_anchor)
+    n_s = int(system.contacts.active.sum())
+    modal = system.C is None
+    if not modal:
+        from .linear import ModalLinear
+
+        _, modal = ModalLinear.is_modal(system.M, system.regularised_stiffness(), system.C)
+    if space == "condensed" or (modal and n_s + 1 < system.n):
+        if not modal:
+            raise InputError("space", space, "physical (the damping is not modal)")
+        return EpmcCondensed(system, fourier, mode, outputs, dc_anchor)
+    return Epmc(system, fourier, mode, outputs, dc_anchor)
 
 
 # -- choosing the mode and the amplitude range -------------------------------------------

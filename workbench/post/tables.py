@@ -36,7 +36,6 @@ __all__ = [
     "Table",
     "base_variant",
     "case_label",
-    "cases_table",
     "curve_set",
     "energy_table",
     "families",
@@ -522,13 +521,6 @@ def _share(pct: float) -> str:
     if math.isnan(pct):
         return "n/a"
     return "none" if pct == 0.0 else ("all" if pct == 100.0 else num(pct, 3))
-
-
-def cases_table(results: StudyResults) -> Table:
-    """One row per case (:func:`workbench.post.answer.cases_table`)."""
-    from .answer import cases_table as table
-
-    return table(results)
 
 
 def sweep_table(curves: Sequence[SweepCurve]) -> Table:

@@ -51,12 +51,12 @@ import logging
 from pathlib import Path
 from typing import Any
 
+from ..post.answer import cases_table
 from ..post.results import StudyResults, family_name
 from ..post.tables import (
     STUCK_TEXT,
     Table,
     base_variant,
-    cases_table,
     curve_set,
     energy_table,
     families,

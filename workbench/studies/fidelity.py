@@ -65,7 +65,6 @@ from ..post.results import CaseResult
 from .fidelity_plan import (
     _check_sampling,
     _settings_dict,
-    parse_harmonics,
     plan_settings,
     propose_combination,
 )
@@ -147,7 +146,7 @@ class _Computer:
 
     def solve(self, todo: list[Case], desc: str) -> None:
         """Compute the cases ``todo`` (grouped by model), saving case and time records."""
-        from .runner import prepare_model, solve_case
+        from ..pipeline import prepare_model, solve_case
 
         if not todo:
             return
@@ -459,7 +458,6 @@ __all__ = [
     "run_fidelity",
     "pareto_front",
     "pick_cheapest",
-    "parse_harmonics",
     "propose_combination",
     "relative_errors",
 ]

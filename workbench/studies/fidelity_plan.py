@@ -14,24 +14,7 @@ from typing import Any
 
 from ..errors import InputError
 from ..post.fidelity import Setting, fineness, level_label
-from .spec import StudySpec
-
-
-def parse_harmonics(text: Any, param: str = "levels-harmonics") -> list[int]:
-    """'1' -> [1]; '0-3' -> [0, 1, 2, 3]; '1+3+5' -> [1, 3, 5]. Must contain 1."""
-    allowed = "'a-b' (a range) or 'h+h+...' (a list) of harmonics >= 0 containing 1"
-    s = str(text).strip()
-    try:
-        if "-" in s:
-            a, b = (int(x) for x in s.split("-"))
-            hs = list(range(a, b + 1))
-        else:
-            hs = [int(x) for x in s.split("+")]
-    except ValueError:
-        raise InputError(param, text, allowed) from None
-    if not hs or 1 not in hs or min(hs) < 0 or len(set(hs)) != len(hs) or max(hs) > 64:
-        raise InputError(param, text, allowed)
-    return sorted(hs)
+from .spec import StudySpec, parse_harmonics
 
 
 def base_values(spec: StudySpec, damper: str) -> dict[str, Any]:

@@ -75,7 +75,7 @@ def family_backbone(
 ):
     """The backbone of ``case``'s family on a prepared model, with its excitation and band."""
     from ..hbm.nlmodes import nonlinear_mode, pick_mode
-    from .runner import band_for
+    from ..pipeline import band_for
 
     s = case.settings
     band = band_for(prep, case)
@@ -122,8 +122,8 @@ def study_backbones(
     """
     from ..hbm.nlmodes import NlModeBranch
     from ..hbm.synthesis import synthesize
+    from ..pipeline import prepare_model
     from ..post.results import CaseResult, family_name
-    from .runner import prepare_model
 
     out = Path(out)
     cases = plan(spec) if cases is None else cases
@@ -496,8 +496,8 @@ def fidelity_entry(comp, base, ref, out: str | Path):
     """
     from ..hbm.nlmodes import NlModeBranch
     from ..hbm.synthesis import synthesize
+    from ..pipeline import prepare_model
     from ..post.fidelity import QUANTITIES, Setting, condition_name
-    from .runner import prepare_model
 
     out = Path(out)
     st = Setting("nonlinear-mode synthesis", dict(base.values), "nlmode")

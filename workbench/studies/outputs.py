@@ -21,7 +21,7 @@ from .plan import plan
 from .spec import StudySpec
 
 if TYPE_CHECKING:
-    from .runner import PreparedModel
+    from ..pipeline import PreparedModel
 
 
 def write_outputs(

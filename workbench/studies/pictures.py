@@ -23,7 +23,7 @@ def study_pictures(cases, prepared: dict, out: Path, comm, cached_costs: dict) -
     ``cached_costs`` gets what the reused ones cost when drawn. Returns True
     when any was drawn. Collective under MPI.
     """
-    from .runner import contact_params_for, load_geometry
+    from ..pipeline import contact_params_for, load_geometry
 
     firsts = [c for i, c in enumerate(cases) if c.damper not in {x.damper for x in cases[:i]}]
 

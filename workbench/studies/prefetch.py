@@ -142,7 +142,7 @@ def plan_tasks(
     Models that share their meshes (a sweep of mu or CF) or a reduced body
     share the task; ``seen`` collects the keys planned.
     """
-    from .runner import geometry_dir
+    from ..pipeline import geometry_dir
 
     seen = set() if seen is None else seen
     models: dict[str, Any] = {}
@@ -167,7 +167,7 @@ def run_task(kind: str, case, out: str, force: bool, comm=None) -> float:
     ``comm``: the ranks doing it (``MPI.COMM_SELF`` for a rank alone under mpirun).
     """
     from ..fe.reduce import reduce_body
-    from .runner import load_geometry
+    from ..pipeline import load_geometry
 
     t0 = time.perf_counter()
     geom = load_geometry(case, Path(out), comm)
@@ -224,8 +224,8 @@ def _init_worker(level: int) -> None:
     import dolfinx.fem.petsc  # noqa: F401
     import gmsh  # noqa: F401
 
+    from .. import pipeline  # noqa: F401
     from ..fe import craig_bampton, reduce  # noqa: F401
-    from . import runner  # noqa: F401
 
 
 def prefetch(cases, out: str | Path, *, rigid_bound: bool = False, force: bool = False) -> dict:
@@ -505,7 +505,7 @@ def _on_root(comm, fn):
 def cached_geometry_of(case, out: Path):
     """The finished geometry record of a case's model, or None (no meshing)."""
     from ..geometry.build import cached_geometry
-    from .runner import geometry_dir, geometry_request
+    from ..pipeline import geometry_dir, geometry_request
 
     req = geometry_request(case)
     return cached_geometry(req.pop("damper"), geometry_dir(case, out), **req)

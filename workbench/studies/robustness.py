@@ -142,8 +142,8 @@ def method_map(
 
 def case_problems(spec: StudySpec, out: Path, force: bool = False) -> list[Problem]:
     """The study's hard cases as problems on the assembled rig + damper models."""
+    from ..pipeline import band_for, prepare_model
     from .plan import make_case
-    from .runner import band_for, prepare_model
 
     base = spec.as_dict()
     prepared: dict[str, Any] = {}

@@ -179,17 +179,26 @@ def case_cost(case, prepared, screen_rows: list[dict[str, Any]] | None = None) -
     return base * (3.5 if slips else 1.0)
 
 
+def world_comm():
+    """MPI.COMM_WORLD when the process runs under mpirun with several ranks, else None."""
+    from ..log import mpi_size
+
+    if mpi_size() > 1:
+        from mpi4py import MPI
+
+        return MPI.COMM_WORLD
+    return None
+
+
 def study_comm():
     """MPI.COMM_WORLD when there are several ranks, else None.
 
-    ``runner._comm`` knows mpirun (OMPI_*, PMI_SIZE); under Slurm's ``srun
+    :func:`world_comm` knows mpirun (OMPI_*, PMI_SIZE); under Slurm's ``srun
     --mpi=pmix`` only PMIX_RANK and SLURM_NTASKS may be set, so those count too.
     """
     import os
 
-    from .runner import _comm as comm
-
-    c = comm()
+    c = world_comm()
     if c is None and "PMIX_RANK" in os.environ and int(os.environ.get("SLURM_NTASKS", "1")) > 1:
         from mpi4py import MPI
 

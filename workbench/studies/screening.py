@@ -49,7 +49,7 @@ def rigid_bound_model(prep, case: Case, out: Path, comm=None):
 def screen_prepared(
     prep, case: Case, phases, out: Path, *, comm=None, f_max_n: float | None = None
 ) -> list[ScreenResult]:
-    """The screen of one prepared model (``runner.PreparedModel``) for each phase."""
+    """The screen of one prepared model (``pipeline.PreparedModel``) for each phase."""
     s = case.settings
     bound = rigid_bound_model(prep, case, out, comm)
     blade = s["response-blade"]
@@ -100,7 +100,7 @@ def study_screens(
     model but must show the same table). Collective under MPI.
     """
     from ..io import write_json
-    from .runner import prepare_model
+    from ..pipeline import prepare_model
 
     models: dict[str, Case] = {}
     for c in cases:
@@ -141,7 +141,7 @@ def run_screen(spec: StudySpec, out: str | Path, *, comm=None) -> dict[str, Any]
     pool's figures (workers, wall seconds, seconds per task).
     """
     from ..log import progress_bar
-    from .runner import prepare_model
+    from ..pipeline import prepare_model
 
     out = Path(out)
     cases = plan(spec)

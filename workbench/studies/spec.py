@@ -272,12 +272,10 @@ def _check_kind_options(spec: StudySpec) -> None:
             f"kind is {spec.kind!r}, which does not sweep",
         )
     from ..post.uncertainty import parse_distribution
-    from .fidelity_plan import parse_harmonics
-    from .uq_samples import _VALID
 
     for i, text in enumerate(spec.levels_harmonics):
         parse_harmonics(text, f"levels-harmonics[{i}]")
-    for name, (vlo, vhi) in _VALID.items():
+    for name, (vlo, vhi) in UQ_VALID.items():
         opt = f"uq-{name}"
         text = getattr(spec, opt.replace("-", "_"))
         lo, hi = parse_distribution(opt, text).support
@@ -459,3 +457,31 @@ def cli_values(args: argparse.Namespace) -> dict[str, Any]:
 
 def sequence_of(spec: StudySpec, name: str) -> Sequence[Any]:
     return getattr(spec, name.replace("-", "_"))
+
+
+# the physical range of each uncertain input's distribution (None: unbounded above)
+UQ_VALID = {
+    "mu": (0.0, 2.0),
+    "cf": (0.0, None),
+    "kt": (0.0, None),
+    "kn": (0.0, None),
+    "damping": (0.0, 0.5),
+    "seat-tilt": (-5.0, 5.0),
+}
+
+
+def parse_harmonics(text: Any, param: str = "levels-harmonics") -> list[int]:
+    """'1' -> [1]; '0-3' -> [0, 1, 2, 3]; '1+3+5' -> [1, 3, 5]. Must contain 1."""
+    allowed = "'a-b' (a range) or 'h+h+...' (a list) of harmonics >= 0 containing 1"
+    s = str(text).strip()
+    try:
+        if "-" in s:
+            a, b = (int(x) for x in s.split("-"))
+            hs = list(range(a, b + 1))
+        else:
+            hs = [int(x) for x in s.split("+")]
+    except ValueError:
+        raise InputError(param, text, allowed) from None
+    if not hs or 1 not in hs or min(hs) < 0 or len(set(hs)) != len(hs) or max(hs) > 64:
+        raise InputError(param, text, allowed)
+    return sorted(hs)

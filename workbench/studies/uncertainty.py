@@ -33,7 +33,7 @@ Cases: each design row is one case of the runner (``plan.make_case`` on
 the study's settings with the row's absolute values), cached under its
 digest plus the seat tilt and the imperfection model's source: a killed
 study resumes, ``--force`` recomputes. The FE reduction and the coupling
-matrix are built once per damper (``runner.prepare_model`` on the nominal
+matrix are built once per damper (``pipeline.prepare_model`` on the nominal
 inputs); a sample only re-makes the contact parameters, the preload vector
 (the seat tilt, :mod:`workbench.studies.imperfection`) and the modal
 damping: nothing is re-meshed or re-reduced.
@@ -106,7 +106,8 @@ log = logging.getLogger(__name__)
 
 def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) -> dict[str, Any]:
     """Compute every sample (resuming from ``out``), then statistics, indices and report."""
-    from .runner import case_done, prepare_model, solve_case
+    from ..pipeline import prepare_model, solve_case
+    from .runner import case_done
 
     out = Path(out)
     comm = study_comm()

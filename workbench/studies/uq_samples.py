@@ -24,16 +24,7 @@ from ..errors import InputError
 from ..io import digest
 from ..post.uncertainty import Design, Distribution, parse_distribution
 from .plan import Case, make_case
-from .spec import StudySpec
-
-_VALID = {
-    "mu": (0.0, 2.0),
-    "cf": (0.0, None),
-    "kt": (0.0, None),
-    "kn": (0.0, None),
-    "damping": (0.0, 0.5),
-    "seat-tilt": (-5.0, 5.0),
-}
+from .spec import UQ_VALID, StudySpec
 
 
 def study_distributions(spec: StudySpec) -> dict[str, Distribution]:
@@ -43,7 +34,7 @@ def study_distributions(spec: StudySpec) -> dict[str, Distribution]:
         opt = f"uq-{name}"
         d = parse_distribution(opt, getattr(spec, opt.replace("-", "_")))
         lo, hi = d.support
-        vlo, vhi = _VALID[name]
+        vlo, vhi = UQ_VALID[name]
         if (
             lo < vlo
             or (vlo == 0.0 and name in ("cf", "kt", "kn") and lo <= 0.0)
@@ -172,13 +163,13 @@ def prepare_sample(base_prep, case: Case, tilt_deg: float):
 
     Nothing is re-meshed or re-reduced: ``W``, ``M`` and ``K`` are the base
     model's. With the nominal values and no tilt this is exactly the model
-    ``runner.prepare_model`` builds for the case.
+    ``pipeline.prepare_model`` builds for the case.
     """
     from ..assembly.model import preloads
     from ..contact.elements import ContactElements
     from ..hbm.system import System
+    from ..pipeline import PreparedModel, contact_params_for
     from .imperfection import open_share, tilted_preloads
-    from .runner import PreparedModel, contact_params_for
 
     t0 = time.perf_counter()
     base = base_prep.assembled
