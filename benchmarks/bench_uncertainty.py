@@ -151,7 +151,7 @@ def mpi_replay(costs: list[float], scale: float, ranks: int, tmp: Path) -> dict:
 
 
 def simulate(costs: list[float], ranks: int) -> dict:
-    from workbench.studies.uncertainty import simulate_schedule
+    from workbench.studies.schedule import simulate_schedule
 
     total = float(sum(costs))
     st = simulate_schedule(costs, ranks, static=True)

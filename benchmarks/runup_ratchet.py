@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
 
     import workbench as wb
-    from workbench.hbm.balance import observation
+    from workbench.hbm.ports import observation
     from workbench.hbm.runup import runup
 
     out = Path(a.out)

@@ -618,7 +618,8 @@ def test_every_path_argument_is_covered():
 
 def test_the_help_states_the_range_of_every_numeric_option():
     from workbench.cli.main import build_parser
-    from workbench.studies.spec import OPTIONS, range_text
+    from workbench.studies.spec import range_text
+    from workbench.study_options import OPTIONS
 
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
     study = {f"--{o.name}": o for o in OPTIONS}

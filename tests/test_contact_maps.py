@@ -16,8 +16,8 @@ from tests.conftest import assert_nonblank
 from tests.synthetic import synthetic_case, synthetic_study
 from workbench.errors import InputError
 from workbench.render.contact_maps import render_contact_maps
+from workbench.render.palette import STATUS_COLORS
 from workbench.render.sections import build_sections
-from workbench.render.study_figures import STATUS_COLORS
 
 COARSE = {"rig": {"mesh": {"size_mm": 10.0, "contact_size_mm": 2.5, "damper_size_mm": 5.0}}}
 SCENE_ROWS = 0.78  # the damper is drawn in the top part of the picture; the legend below

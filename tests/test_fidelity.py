@@ -13,12 +13,9 @@ import pytest
 
 from tests.conftest import ROOT, assert_nonblank, run_upd
 from workbench.errors import InputError
-from workbench.studies.fidelity import (
-    Setting,
-    pareto_front,
-    pick_cheapest,
-    propose_combination,
-)
+from workbench.post.fidelity import Setting
+from workbench.post.pareto import pareto_front, pick_cheapest
+from workbench.studies.fidelity_plan import propose_combination
 from workbench.studies.spec import parse_harmonics, resolve
 
 # ---- Pareto front ---------------------------------------------------------------------------
@@ -189,7 +186,7 @@ def test_study_help_mentions_the_fidelity_options():
 
 
 def test_the_study_file_resolves():
-    from workbench.studies.fidelity import plan_settings
+    from workbench.studies.fidelity_plan import plan_settings
     from workbench.studies.spec import load_study
 
     spec = load_study(ROOT / "studies" / "fidelity.toml", {"tolerance": "1%"})
@@ -360,8 +357,8 @@ def test_tiny_second_run_reuses_everything(tiny):
 def test_tiny_failed_case_has_no_error_and_is_never_picked(tiny):
     import dataclasses
 
+    from workbench.post.fidelity import relative_errors
     from workbench.post.results import CaseResult
-    from workbench.studies.fidelity import relative_errors
 
     d, _ = tiny
     files = sorted((d / "out" / "cache" / "cases").glob("*.h5"))
@@ -435,7 +432,7 @@ def test_fidelity_nonlinear_mode_entry(tmp_path):
     error is the synthesised peak against the reference setting's HBM peak (recomputed
     here from the cached backbone), within 2 % where the synthesis calls itself valid,
     and its time is the base model's plus the backbone's."""
-    from workbench.hbm.nlmodes import NlModeBranch
+    from workbench.hbm.nlmode_branch import NlModeBranch
     from workbench.hbm.synthesis import synthesize
     from workbench.studies.fidelity import run_fidelity
     from workbench.studies.spec import load_study

@@ -23,6 +23,8 @@ from workbench.render import fidelity_figures as ff
 from workbench.render import robustness_figures as rf
 from workbench.render import study_figures as sf
 from workbench.render.common import save_figure
+from workbench.render.status_figures import plot_status_map, plot_status_shares
+from workbench.render.sweep_figures import plot_sweep
 
 UNIT = re.compile(r"\(([^)]*[A-Za-z%/][^)]*)\)|, (%|s|Hz|mm|mJ|N)$")
 COUNTS = {"contact pair number", "contact element", "stuck / 0"}
@@ -85,9 +87,9 @@ def _kinds(study, sdof_branches):
         "receptance_overlay": lambda p: sf.plot_receptance_overlay(fam, p),
         "peak_vs_force": lambda p: sf.plot_peak_vs_force(fam, p),
         "energy_vs_force": lambda p: sf.plot_energy_vs_force(fam, p),
-        "status_map": lambda p: sf.plot_status_map(cases[1:], p),
-        "status_shares": lambda p: sf.plot_status_shares(fam, p),
-        "sweep": lambda p: sf.plot_sweep(sweep.cases, "cf", p),
+        "status_map": lambda p: plot_status_map(cases[1:], p),
+        "status_shares": lambda p: plot_status_shares(fam, p),
+        "sweep": lambda p: plot_sweep(sweep.cases, "cf", p),
         "sweep_receptances": lambda p: sf.plot_sweep_receptances(sweep.cases, "cf", p),
         "frf": lambda p: curves.plot_frf(sdof_branches, p, unit_scale=1e3, unit="mm"),
         "frf_status": lambda p: curves.plot_status_map(sdof_branches[-1], p),

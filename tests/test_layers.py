@@ -191,3 +191,112 @@ def test_the_cycle_check_finds_a_cycle_through_a_function_level_import(tmp_path)
     assert cycles(import_graph(pkg)) == []
     (pkg / "c.py").write_text("def g():\n    from . import a\n    return a\n")
     assert cycles(import_graph(pkg)) == [["pkg.a", "pkg.c", "pkg.sub.b"]]
+
+
+# ---- no re-export shims (issue 30) -------------------------------------------------------------
+ROOT = PKG.parent
+
+
+def _top_level(path: Path) -> tuple[set[str], set[str]]:
+    """(names a module defines, names it imports) at its top level (inside if/try too)."""
+    defined: set[str] = set()
+    imported: set[str] = set()
+
+    def visit(body):
+        for node in body:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                defined.add(node.name)
+            elif isinstance(node, ast.Assign):
+                defined.update(
+                    n.id for t in node.targets for n in ast.walk(t) if isinstance(n, ast.Name)
+                )
+            elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+                defined.add(node.target.id)
+            elif isinstance(node, (ast.Import, ast.ImportFrom)):
+                imported.update((a.asname or a.name).split(".")[0] for a in node.names)
+            elif isinstance(node, (ast.If, ast.Try)):
+                visit(node.body)
+                visit(node.orelse)
+                for h in getattr(node, "handlers", []):
+                    visit(h.body)
+                visit(getattr(node, "finalbody", []))
+
+    visit(ast.parse(path.read_text()).body)
+    return defined, imported
+
+
+def _modules(pkg: Path) -> dict[str, Path]:
+    out = {}
+    for p in sorted(pkg.rglob("*.py")):
+        parts = p.relative_to(pkg.parent).with_suffix("").parts
+        out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = p
+    return out
+
+
+def reexports(pkg: Path, users: list[Path]) -> list[str]:
+    """Imports of a name from a module (not a package) that only imports it, and names a
+    module's ``__all__`` lists without defining them: a re-export shim either way."""
+    mods = _modules(pkg)
+    tops = {m: _top_level(p) for m, p in mods.items() if p.name != "__init__.py"}
+    bad = []
+    for m, p in mods.items():
+        if m not in tops:
+            continue
+        for node in ast.parse(p.read_text()).body:
+            if isinstance(node, (ast.Assign, ast.AugAssign)) and isinstance(
+                node.value, (ast.List, ast.Tuple)
+            ):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                if any(isinstance(t, ast.Name) and t.id == "__all__" for t in targets):
+                    defined, imported = tops[m]
+                    bad += [
+                        f"{p.relative_to(pkg.parent)}: __all__ lists {e.value!r}, imported"
+                        for e in node.value.elts
+                        if isinstance(e, ast.Constant)
+                        and e.value not in defined
+                        and e.value in imported
+                    ]
+    for f in users:
+        parts = f.relative_to(pkg.parent).with_suffix("").parts
+        for node in ast.walk(ast.parse(f.read_text())):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            if node.level:
+                base = list(parts[:-1])[: len(parts) - 1 - (node.level - 1)]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            if mod not in tops:
+                continue
+            defined, imported = tops[mod]
+            bad += [
+                f"{f.relative_to(pkg.parent)}:{node.lineno}: {a.name} from {mod}, "
+                "which only imports it"
+                for a in node.names
+                if a.name not in defined and a.name in imported and f"{mod}.{a.name}" not in mods
+            ]
+    return bad
+
+
+def test_no_name_is_imported_through_a_module_that_only_imports_it():
+    users = [
+        p
+        for d in ("workbench", "tests", "benchmarks", "examples")
+        for p in sorted((ROOT / d).rglob("*.py"))
+    ]
+    bad = reexports(PKG, users)
+    assert not bad, "re-exports (import from the module that defines the name):\n" + "\n".join(bad)
+
+
+def test_the_reexport_check_finds_both_kinds(tmp_path):
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("from .a import f\n")  # a package may gather its names
+    (pkg / "a.py").write_text("def f():\n    pass\n")
+    (pkg / "b.py").write_text("from .a import f\n__all__ = ['f', 'g']\ndef g():\n    return f()\n")
+    (pkg / "c.py").write_text("from .b import f, g\nfrom . import f as h\n")
+    bad = reexports(pkg, sorted(pkg.glob("*.py")))
+    assert bad == [
+        "pkg/b.py: __all__ lists 'f', imported",
+        "pkg/c.py:1: f from pkg.b, which only imports it",
+    ]

@@ -18,9 +18,12 @@ import pytest
 
 from workbench.contact import ContactElements
 from workbench.hbm import SolverOptions, System, frequency_response
+from workbench.hbm.epmc import Epmc
+from workbench.hbm.epmc_condensed import EpmcCondensed
 from workbench.hbm.examples import sdof_jenkins, two_dof_contact
 from workbench.hbm.fourier import Fourier
-from workbench.hbm.nlmodes import Epmc, EpmcCondensed, NlModeBranch, nonlinear_mode
+from workbench.hbm.nlmode_branch import NlModeBranch
+from workbench.hbm.nlmodes import nonlinear_mode, pick_mode, slip_amplitude
 from workbench.hbm.synthesis import synthesize
 
 
@@ -205,8 +208,9 @@ def test_branch_save_load_csv(tmp_path, jenkins):
 def test_condensed_form_matches_all_dofs():
     """The condensed unknowns (contact displacements + the followed mode) give the same
     backbone as the unknowns on every DOF; its Jacobian matches finite differences."""
+    from workbench.hbm.epmc_condensed import EpmcCondensed
     from workbench.hbm.examples import line_damper_rig
-    from workbench.hbm.nlmodes import EpmcCondensed, pick_mode, slip_amplitude
+    from workbench.hbm.nlmodes import pick_mode, slip_amplitude
 
     ex = line_damper_rig(n_per_line=3)
     mode = pick_mode(ex.system, ex.f1, ex.band_hz)
@@ -402,3 +406,29 @@ def test_a_peak_inside_a_coarse_segment_whose_output_bends_is_flagged():
     s2 = synthesize(dataclasses.replace(b, out_amp=bent), ex.f1, lv, 0)
     assert not s2.valid
     assert any("coarse segment" in r and "5.0 %" in r for r in s2.reasons), s2.reasons
+
+
+def test_a_failed_last_point_never_leaves_the_range_uncovered(monkeypatch):
+    """The point exactly at the largest amplitude may fail to converge: the backbone then
+    ends at the converged step past it (it still covers the range it claims), never at
+    the point before with ``completed`` set as if it had reached the end."""
+    from workbench.hbm.nlmode_corrector import Snes
+
+    ex = sdof_jenkins()
+    a_slip = slip_amplitude(ex.system, pick_mode(ex.system, ex.f1))
+    a0, a1 = 0.5 * a_slip, 20.0 * a_slip
+    real = Snes.solve
+    hit = []
+
+    def solve(self, Y0, c=None, Yp=None):
+        if c is None and float(Y0[-1]) == np.log(a1):  # the guess placed at the end
+            hit.append(float(Y0[-1]))
+            return Y0, False, 1
+        return real(self, Y0, c, Yp)
+
+    monkeypatch.setattr(Snes, "solve", solve)
+    b = nonlinear_mode(ex.system, harmonics=(1,), outputs=[0], amplitude_range=(a0, a1))
+    assert hit, "the end point was never tried: the test does not test"
+    assert b.completed and not b.failed, b.message
+    assert b.amplitude[-1] >= a1 * (1 - 1e-12)
+    assert np.all(np.diff(b.amplitude) > 0)

@@ -12,9 +12,11 @@ import dataclasses
 import numpy as np
 import pytest
 
+from tests.conftest import ROOT
 from tests.synthetic import synthetic_case, synthetic_study
 from workbench.render import palette
 from workbench.render import study_figures as sf
+from workbench.render.palette import damper_style
 
 
 def _legend_texts(fig) -> list[str]:
@@ -53,12 +55,20 @@ def test_contact_states_keep_their_order_in_greyscale():
 
 
 def test_the_figures_read_the_palette():
-    """Every colour of a status or a damper a figure module uses is the palette's."""
-    from workbench.render import contact_maps, curves, nlmode_figures, status_figures
+    """Every colour of a status or a damper a figure module uses is the palette's: each
+    module that names status colours (found by reading the sources) has the palette's."""
+    import importlib
 
-    for mod in (curves, nlmode_figures, status_figures, contact_maps, sf):
+    users = sorted(
+        p.stem
+        for p in (ROOT / "workbench" / "render").glob("*.py")
+        if "STATUS_COLORS" in p.read_text() and p.stem != "palette"
+    )
+    assert {"contact_maps", "curves", "nlmode_figures", "status_figures"} <= set(users)
+    for name in users:
+        mod = importlib.import_module(f"workbench.render.{name}")
         assert tuple(mod.STATUS_COLORS) == palette.STATUS_COLORS, mod.__name__
-    assert sf.damper_style("wedge") == palette.damper_style("wedge")
+    assert damper_style("wedge") == palette.damper_style("wedge")
 
 
 def test_carried_verdicts_are_shown_as_carried(unknowns):

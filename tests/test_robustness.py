@@ -16,16 +16,26 @@ import pytest
 from conftest import assert_nonblank, run_upd
 
 from workbench.errors import InputError, SolveError
+from workbench.hard_cases import CASES, METHODS
 from workbench.hbm.examples import sdof_jenkins, sdof_unilateral
 from workbench.studies import robustness as rb
-from workbench.studies.spec import BY_NAME, resolve
+from workbench.studies.robustness_cells import ENERGY_TOL, Problem, classify, method_options
+from workbench.studies.robustness_time import (
+    TIME_MODELS,
+    branch_amplitudes_at,
+    compare_with_branch,
+    time_check,
+    turning_points,
+)
+from workbench.studies.spec import resolve
+from workbench.study_options import BY_NAME
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _problem(name, ex, level, band=None, harmonics=(0, 1, 2, 3)):
     band = band or ex.band_hz
-    return rb.Problem(
+    return Problem(
         name,
         f"test-{name}-{level}-{band}",
         level,
@@ -115,7 +125,7 @@ def test_a_converged_but_different_peak_is_a_wrong_answer():
             band_hz=[0.0, 20.0],
         ),
     ]
-    rb.classify(cells, "a", 1.0)
+    classify(cells, "a", 1.0)
     assert [c["status"] for c in cells] == ["ok", "wrong", "ok", "failed"]
     assert cells[1]["amp_dev_pct"] == pytest.approx(-3.0)
     assert cells[2]["freq_dev_pct"] == pytest.approx(5.0)
@@ -123,8 +133,8 @@ def test_a_converged_but_different_peak_is_a_wrong_answer():
 
 def test_turning_points_are_sign_changes_of_the_frequency_increment():
     f = np.array([1.0, 2.0, 3.0, 2.5, 2.0, 2.6, 4.0])
-    assert rb.turning_points(f).tolist() == [2, 4]  # the vertices, f = 3 and f = 2
-    assert rb.turning_points(np.linspace(1, 2, 9)).size == 0
+    assert turning_points(f).tolist() == [2, 4]  # the vertices, f = 3 and f = 2
+    assert turning_points(np.linspace(1, 2, 9)).size == 0
 
 
 def test_time_integration_is_compared_with_the_nearest_coexisting_solution():
@@ -134,10 +144,10 @@ def test_time_integration_is_compared_with_the_nearest_coexisting_solution():
         "amp": [0.0, 2.0, 3.0, 4.0],
         "points": [{"freq_hz": 2.0, "hbm_amplitude": 1.0, "ti_amplitude": 3.03}],
     }
-    assert sorted(rb.branch_amplitudes_at(check["freq_hz"], check["amp"], 2.0)) == pytest.approx(
+    assert sorted(branch_amplitudes_at(check["freq_hz"], check["amp"], 2.0)) == pytest.approx(
         [1.0, 2.0 + 2.0 / 3.0, 3.0 + 1.0 / 3.0]
     )
-    rb.compare_with_branch(check)
+    compare_with_branch(check)
     r = check["points"][0]
     assert r["nearest_hbm_amplitude"] == pytest.approx(3.0 + 1.0 / 3.0)
     assert r["diff_nearest_pct"] == pytest.approx(100 * (3.03 / (10 / 3) - 1))
@@ -173,10 +183,10 @@ def test_map_figure_is_not_blank(jenkins_cells, tmp_path):
 
 
 def test_registry_matches_the_study_options():
-    assert tuple(rb.METHODS) == BY_NAME["methods"].choices
-    assert tuple(rb.CASES) == BY_NAME["hard-cases"].choices
-    assert rb.method_options("default") == rb.method_options("default", {})
-    assert rb.method_options("fixed-step").ds_min == rb.method_options("fixed-step").ds_max
+    assert tuple(METHODS) == BY_NAME["methods"].choices
+    assert tuple(CASES) == BY_NAME["hard-cases"].choices
+    assert method_options("default") == method_options("default", {})
+    assert method_options("fixed-step").ds_min == method_options("fixed-step").ds_max
 
 
 @pytest.mark.parametrize(
@@ -211,8 +221,8 @@ def test_study_help_lists_the_robustness_options():
         "--hard-cases",
         "--peak-tolerance",
         "--time-check",
-        *rb.METHODS,
-        *rb.CASES,
+        *METHODS,
+        *CASES,
     ):
         assert word in text, word
 
@@ -220,7 +230,7 @@ def test_study_help_lists_the_robustness_options():
 def test_time_integration_confirms_the_light_damping_peak():
     # the Jenkins oscillator with 0.01 % damping: time integration started on the HBM orbit
     # at the peak stays on it (7 harmonics: the HBM truncation error is well below 1 %)
-    rec = rb.time_check("sdof-light-damping", rb.TIME_MODELS["sdof-light-damping"])
+    rec = time_check("sdof-light-damping", TIME_MODELS["sdof-light-damping"])
     peak = next(r for r in rec["points"] if "peak" in r["why"])
     assert peak["hill_stable"]
     assert abs(peak["diff_pct"]) < 1.0
@@ -276,7 +286,7 @@ def test_every_accepted_point_is_a_solution(method, model):
         if model == "jenkins"
         else (two_dof_contact(zeta=0.005), 3.0, tuple(range(6)))
     )
-    opts = rb.method_options(method)
+    opts = method_options(method)
     b = frequency_response(
         ex.system, ex.f1, level, ex.band_hz, outputs=ex.outputs, harmonics=harm, options=opts
     )
@@ -306,7 +316,7 @@ def test_every_accepted_point_is_a_solution(method, model):
     # and may reach tol_stall
     limit = opts.tol if b.stats["n_stalled"] == 0 else opts.tol_stall
     assert worst <= 1.01 * limit
-    assert np.max(b.energy_residual) < rb.ENERGY_TOL
+    assert np.max(b.energy_residual) < ENERGY_TOL
 
 
 def test_report_text_names_each_failure_and_how_far_it_got():
@@ -347,13 +357,13 @@ def test_report_text_names_each_failure_and_how_far_it_got():
             peak_frequency_hz=340.0,
         ),
     ]
-    rb.classify(cells, "default", 1.0)
+    classify(cells, "default", 1.0)
     secs = rb._sections(spec, cells, [], {})
     text = " ".join(secs[1]["text"])
     assert "fixed-step on high-force: the corrector failed at f = 340 Hz" in text
     assert "reached 340 Hz, 40 % of the band, 12 points kept" in text
     # a converged branch that is not a solution (energy balance off) is a wrong answer
     cells[1].update(succeeded=True, energy_residual_max=0.4, peak_amplitude=1.0)
-    rb.classify(cells, "default", 1.0)
+    classify(cells, "default", 1.0)
     assert cells[1]["status"] == "wrong"
     assert "energy balance is off by 0.4" in " ".join(rb._sections(spec, cells, [], {})[1]["text"])

@@ -104,7 +104,7 @@ def rod(tmp_path, monkeypatch):
 
 def test_a_new_shape_module_is_found_without_other_edits(rod):
     from workbench.pipeline import geometry_request
-    from workbench.render.study_style import damper_style
+    from workbench.render.palette import damper_style
     from workbench.studies.plan import Case
 
     assert shapes.names() == ("cone", "cylinder", "wedge", "rod")

@@ -46,8 +46,11 @@ from workbench.post.tables import (
     sweep_curve,
 )
 from workbench.render import study_figures as sf
+from workbench.render.common import pyplot, save_figure
 from workbench.render.report import render_html
 from workbench.render.sections import build_sections
+from workbench.render.status_figures import plot_status_map
+from workbench.render.sweep_figures import option_label
 
 DATA = Path(__file__).resolve().parent / "data"
 MEAN_TOL = 0.02  # mean |difference| over all pixels (largest channel), fraction of full scale
@@ -92,7 +95,7 @@ def built(study, tmp_path_factory):
     """build_sections of the comparison study, with a mode-shape PNG, a rig PNG and a timings
     table already in the folder (as the study runner may have written them)."""
     root = tmp_path_factory.mktemp("study")
-    plt = sf.pyplot()
+    plt = pyplot()
     for name, color in (
         ("modes_in-phase", "C0"),
         ("mode_02", "C1"),
@@ -102,7 +105,7 @@ def built(study, tmp_path_factory):
         fig, ax = plt.subplots(figsize=(3, 2))
         ax.plot([0, 1, 2], [0, 1, 0], color=color, lw=4)
         (root / "figures").mkdir(exist_ok=True)
-        sf.save_figure(fig, root / "figures" / f"{name}.png")
+        save_figure(fig, root / "figures" / f"{name}.png")
     (root / "tables").mkdir(exist_ok=True)
     (root / "tables" / "timings.csv").write_text("stage,wall time (s)\nhbm,12.5\n")
     sections = build_sections(study, root)
@@ -192,9 +195,9 @@ def test_figures_refuse_mixed_cases(study, tmp_path):
 
 
 def test_option_labels_come_from_the_study_options():
-    assert sf.option_label("cf") == ("centrifugal force on the damper", "N")
-    assert sf.option_label("cone-angle") == ("cone semi-angle", "deg")
-    assert sf.option_label("mu") == ("friction coefficient", "-")
+    assert option_label("cf") == ("centrifugal force on the damper", "N")
+    assert option_label("cone-angle") == ("cone semi-angle", "deg")
+    assert option_label("mu") == ("friction coefficient", "-")
 
 
 # ---- the report sections ----------------------------------------------------------------
@@ -348,7 +351,7 @@ REGRESSION = {
     "ref_receptance_wedge_in-phase.png": lambda cases, forces, path: sf.plot_receptances(
         cases, path, forces=forces
     ),
-    "ref_status_map_wedge_in-phase.png": lambda cases, forces, path: sf.plot_status_map(
+    "ref_status_map_wedge_in-phase.png": lambda cases, forces, path: plot_status_map(
         cases[1:], path
     ),
 }

@@ -7,7 +7,8 @@ import pytest
 from tests.conftest import ROOT, run_upd
 from workbench.errors import InputError
 from workbench.studies.plan import plan
-from workbench.studies.spec import OPTIONS, load_study, resolve
+from workbench.studies.spec import load_study, resolve
+from workbench.study_options import OPTIONS
 
 
 def test_cli_overrides_file_and_records_origin(tmp_path):

@@ -16,21 +16,33 @@ import pytest
 
 from tests.conftest import ROOT, run_upd
 from workbench.errors import InputError
+from workbench.post.uncertainty import (
+    answer_rows,
+    driver,
+    driver_verdict,
+    headline,
+    make_design,
+    parse_distribution,
+    sobol_indices,
+    statistics,
+)
 from workbench.studies import uncertainty as U
 from workbench.studies.imperfection import seated_preloads, side_coordinate, tilted_preloads
+from workbench.studies.schedule import run_tasks, schedule_efficiency, simulate_schedule
+from workbench.studies.uq_samples import study_distributions
 
 # ---- distributions and design ----------------------------------------------------------
 
 
 def test_distributions_parse_and_truncate():
-    d = U.parse_distribution("uq-mu", "normal 0.5 0.1 0.3 0.7")
+    d = parse_distribution("uq-mu", "normal 0.5 0.1 0.3 0.7")
     x = d.ppf(np.linspace(0, 1, 1001))
     assert x.min() == pytest.approx(0.3) and x.max() == pytest.approx(0.7)
     assert np.all(np.diff(x) >= 0)
     assert d.ppf(np.array([0.5]))[0] == pytest.approx(0.5)  # symmetric truncation keeps it
-    ln = U.parse_distribution("uq-kt", "lognormal 2 0.5")
+    ln = parse_distribution("uq-kt", "lognormal 2 0.5")
     assert ln.ppf(np.array([0.5]))[0] == pytest.approx(2.0)  # the median
-    u = U.parse_distribution("uq-cf", "uniform, 0.8, 1.2")
+    u = parse_distribution("uq-cf", "uniform, 0.8, 1.2")
     assert u.ppf(np.array([0.25]))[0] == pytest.approx(0.9)
     for bad in (
         "gauss 1 2",
@@ -42,21 +54,21 @@ def test_distributions_parse_and_truncate():
         "normal 1 x",
     ):
         with pytest.raises(InputError):
-            U.parse_distribution("uq-mu", bad)
+            parse_distribution("uq-mu", bad)
 
 
 def test_design_of_n_is_a_prefix_of_2n_and_marginals_follow_the_distribution():
     dists = {
-        "mu": U.parse_distribution("mu", "uniform 0.2 0.8"),
-        "cf": U.parse_distribution("cf", "normal 1 0.1 0.7 1.3"),
+        "mu": parse_distribution("mu", "uniform 0.2 0.8"),
+        "cf": parse_distribution("cf", "normal 1 0.1 0.7 1.3"),
     }
-    small = U.make_design(dists, 8, seed=5)
-    big = U.make_design(dists, 16, seed=5)
+    small = make_design(dists, 8, seed=5)
+    big = make_design(dists, 16, seed=5)
     assert small.n_rows == 8 * 4 and big.n_rows == 16 * 4
     assert np.array_equal(small.values, big.values[: small.n_rows])  # bit for bit
     assert [small.role(r) for r in range(4)] == ["A", "AB1", "AB2", "B"]
     # the A and B rows are quasi-random draws of the joint distribution
-    many = U.make_design(dists, 1024, seed=1)
+    many = make_design(dists, 1024, seed=1)
     ab = many.values[many.ab_rows]
     assert ab[:, 0].mean() == pytest.approx(0.5, abs=0.005)  # uniform 0.2..0.8
     assert ab[:, 1].std() == pytest.approx(0.1, rel=0.1)  # truncated at 3 sd: ~0.097
@@ -65,7 +77,7 @@ def test_design_of_n_is_a_prefix_of_2n_and_marginals_follow_the_distribution():
 
 def test_statistics_percentiles_and_exceedance():
     y = np.arange(1.0, 101.0)
-    st = U.statistics(np.append(y, np.nan), threshold=90.0)
+    st = statistics(np.append(y, np.nan), threshold=90.0)
     assert st["n"] == 100 and st["n_missing"] == 1
     assert st["p50"] == pytest.approx(50.5) and st["p95"] == pytest.approx(95.05)
     assert st["p_exceed"] == pytest.approx(0.10)
@@ -114,35 +126,35 @@ def test_ishigami_closed_form_matches_the_quoted_values():
 
 def test_sobol_indices_of_ishigami_come_out_right():
     pi = f"{math.pi!r}"
-    dists = {k: U.parse_distribution(k, f"uniform -{pi} {pi}") for k in ("x1", "x2", "x3")}
-    design = U.make_design(dists, 4096, seed=11)
+    dists = {k: parse_distribution(k, f"uniform -{pi} {pi}") for k in ("x1", "x2", "x3")}
+    design = make_design(dists, 4096, seed=11)
     x = design.values
     y = np.sin(x[:, 0]) + 7.0 * np.sin(x[:, 1]) ** 2 + 0.1 * x[:, 2] ** 4 * np.sin(x[:, 0])
-    ind = U.sobol_indices(design, y, seed=3)
+    ind = sobol_indices(design, y, seed=3)
     # estimator error at N = 4096 (Saltelli/Jansen, scrambled Sobol): ~0.01; SALib's own
     # bootstrap half-widths are ~0.02-0.04
     assert ind["S1"] == pytest.approx(ISHIGAMI_S1, abs=0.03)
     assert ind["ST"] == pytest.approx(ISHIGAMI_ST, abs=0.03)
-    assert U.driver(ind) == "x1"
-    ver = U.driver_verdict(ind)  # x1 0.558 against x2 0.442: told apart at this N
+    assert driver(ind) == "x1"
+    ver = driver_verdict(ind)  # x1 0.558 against x2 0.442: told apart at this N
     assert ver["resolved"] and ver["contenders"] == [] and ver["negligible"] == []
     # at N = 8 the half-widths (0.3-1) swallow the 0.12 gap: x2 is a contender
-    small = U.make_design(dists, 8, seed=11)
+    small = make_design(dists, 8, seed=11)
     xs = small.values
     ys = np.sin(xs[:, 0]) + 7.0 * np.sin(xs[:, 1]) ** 2 + 0.1 * xs[:, 2] ** 4 * np.sin(xs[:, 0])
-    ver8 = U.driver_verdict(U.sobol_indices(small, ys, seed=3))
+    ver8 = driver_verdict(sobol_indices(small, ys, seed=3))
     assert not ver8["resolved"] and ver8["contenders"]
     # an input with no effect is ruled out even where the driver is not resolved
     fake = dict(names=["a", "b", "c"], ST=[0.5, 0.4, 0.01], ST_conf=[0.3, 0.3, 0.02])
-    assert U.driver_verdict(fake) == dict(
+    assert driver_verdict(fake) == dict(
         driver="a", resolved=False, contenders=["b"], negligible=["c"]
     )
     # a driver whose interval reaches 0 still wins when every other input is negligible
     lone = dict(names=["a", "b"], ST=[0.5, 0.01], ST_conf=[0.6, 0.02])
-    assert U.driver_verdict(lone)["resolved"]
+    assert driver_verdict(lone)["resolved"]
     # a missing output drops its whole base point, the rest still gives the answer
     y[5] = np.nan
-    ind2 = U.sobol_indices(design, y, seed=3)
+    ind2 = sobol_indices(design, y, seed=3)
     assert ind2["n_used"] == 4095
     assert ind2["ST"] == pytest.approx(ISHIGAMI_ST, abs=0.03)
 
@@ -185,8 +197,8 @@ def test_static_round_robin_loses_to_dynamic_when_costs_vary_tenfold():
     # a Saltelli block of 8 rows where the AB rows of one input separate (10x dearer): on 2
     # ranks round-robin hands all of them to the same rank
     costs = [1.0, 1.0, 1.0, 10.0, 1.0, 1.0, 1.0, 1.0] * 16
-    static = U.simulate_schedule(costs, 2, static=True)
-    dynamic = U.simulate_schedule(costs, 2, static=False)
+    static = simulate_schedule(costs, 2, static=True)
+    dynamic = simulate_schedule(costs, 2, static=False)
     ideal = sum(costs) / 2
     assert static == pytest.approx(16 * 13)  # rank 1: 1 + 10 + 1 + 1 per block
     assert dynamic <= ideal + max(costs)
@@ -195,9 +207,9 @@ def test_static_round_robin_loses_to_dynamic_when_costs_vary_tenfold():
 
 def test_serial_run_tasks_counts_every_task_once():
     seen = []
-    rec = U.run_tasks(7, lambda k: seen.append(k) or {"v": k * k})
+    rec = run_tasks(7, lambda k: seen.append(k) or {"v": k * k})
     assert seen == list(range(7)) and [r["v"] for r in rec] == [k * k for k in range(7)]
-    eff = U.schedule_efficiency(rec, 1)
+    eff = schedule_efficiency(rec, 1)
     assert 0.0 < eff["efficiency"] <= 1.0 + 1e-9
 
 
@@ -354,10 +366,10 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
     from workbench.render.uncertainty_figures import uncertainty_figures
 
     dists = {
-        "mu": U.parse_distribution("mu", "normal 0.5 0.1 0.25 0.75"),
-        "seat-tilt": U.parse_distribution("t", "normal 0 0.01 -0.03 0.03"),
+        "mu": parse_distribution("mu", "normal 0.5 0.1 0.25 0.75"),
+        "seat-tilt": parse_distribution("t", "normal 0 0.01 -0.03 0.03"),
     }
-    design = U.make_design(dists, 32, 1)
+    design = make_design(dists, 32, 1)
     x = design.values
     res = {}
     for k, d in enumerate(("cone", "wedge")):
@@ -375,12 +387,12 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
     assert a["robust"] == {"in-phase": "cone", "out-of-phase": "cone"}
     drivers = {(r["damper"], r["family"]): r["driver"] for r in a["groups"]}
     assert drivers[("cone", "in-phase")] == "mu" and drivers[("wedge", "in-phase")] == "seat-tilt"
-    ans = U.answer_rows(a)
+    ans = answer_rows(a)
     assert [(r["family"], r["rank"], r["damper"]) for r in ans][:2] == [
         ("in-phase", 1, "cone"),
         ("in-phase", 2, "wedge"),
     ]
-    assert any("the cone has the smallest 95th-percentile peak" in x for x in U.headline(a))
+    assert any("the cone has the smallest 95th-percentile peak" in x for x in headline(a))
     figs = uncertainty_figures(tmp_path / "figures", design, res, a)
     assert {f["id"] for f in figs} >= {"violins", "exceedance", "tornado", "scatter"}
     for f in figs:
@@ -402,7 +414,7 @@ def test_bad_uncertainty_inputs_exit_2_before_any_work(tmp_path):
         ({"uq-kt": "normal 1 1"}, "uq-kt"),
     ):
         with pytest.raises(InputError, match=needle):
-            U.study_distributions(resolve({"kind": "uncertainty", **values}))
+            study_distributions(resolve({"kind": "uncertainty", **values}))
     r = run_upd(
         "study",
         "--kind",

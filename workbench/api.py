@@ -73,7 +73,7 @@ class Model:
 
 
 def _options(options: dict[str, Any]) -> dict[str, Any]:
-    from .studies.spec import BY_NAME
+    from .study_options import BY_NAME
 
     out = {}
     for key, v in options.items():
@@ -124,7 +124,8 @@ def frf(m: Model, force_n: float, phase_deg: float = 180.0, **options: Any):
     from .errors import check_range
     from .pipeline import solve_case
     from .studies.plan import MODEL_KEYS, make_case
-    from .studies.spec import BY_NAME, check_option
+    from .studies.spec import check_option
+    from .study_options import BY_NAME
 
     values = _options(options)
     for k in values:
@@ -159,7 +160,7 @@ def receptance_figure(
 
 def status_figure(curves: Sequence[Any], path: str | Path | None = None, title: str | None = None):
     """Contact status of every pair along the curves (one panel per curve)."""
-    from .render.study_figures import plot_status_map
+    from .render.status_figures import plot_status_map
 
     return plot_status_map(list(curves), path, title=title)
 

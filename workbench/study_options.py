@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from .geometry.params import DAMPERS
-from .hard_cases import CASES, METHODS, HardCase
+from .hard_cases import CASES, METHODS
 from .limits import (
     BAND_MAX_HZ,
     BAND_WHY,
@@ -36,7 +36,12 @@ from .limits import (
 # the robustness study's names, for the options that list them
 ROBUSTNESS_METHODS = tuple(METHODS)
 ROBUSTNESS_CASES = tuple(CASES)
-__all__ = ["BY_NAME", "CASES", "KINDS", "METHODS", "OPTIONS", "HardCase", "Option"]
+__all__ = [
+    "BY_NAME",
+    "KINDS",
+    "OPTIONS",
+    "Option",
+]
 
 
 KINDS = ("comparison", "sweep", "fidelity", "robustness", "uncertainty")

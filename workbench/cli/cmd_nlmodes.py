@@ -130,7 +130,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..config import read_toml
     from ..errors import InputError
-    from ..studies.spec import OPTIONS
+    from ..study_options import OPTIONS
 
     if not args.file.is_file():
         raise InputError("FILE", str(args.file), "an existing model or study file (TOML)")
@@ -168,7 +168,8 @@ def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..hbm.synthesis import synthesize
     from ..io import write_json
     from ..render.nlmode_figures import plot_backbones, plot_synthesis
-    from ..studies.spec import BY_NAME, check_option
+    from ..studies.spec import check_option
+    from ..study_options import BY_NAME
     from .cmd_frf import OVERRIDE_NAMES, overrides
 
     for name in MODEL_STUDY_OPTIONS:  # the study options' own rule

@@ -18,7 +18,7 @@ Nothing here knows about harmonics beyond the synthesis/analysis matrices
 it is handed; :mod:`workbench.hbm` owns the Fourier layout.
 """
 
-from .elements import LAWS, ContactElements
+from .elements import ContactElements
 from .law import (
     FULL_SEPARATION,
     PARTIAL_SEPARATION,
@@ -29,7 +29,7 @@ from .law import (
     classify,
     march_samples,
 )
-from .laws import get_law
+from .laws import LAWS, get_law
 from .march import march
 
 __all__ = [

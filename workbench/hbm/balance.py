@@ -71,10 +71,6 @@ __all__ = [
     "HarmonicBalance",
     "HillParts",
     "PointData",
-    "excitation_vector",
-    "loop_dissipation",
-    "loop_normal_work",
-    "observation",
 ]
 
 

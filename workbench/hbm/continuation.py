@@ -28,12 +28,13 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import InputError, check_range
-from .balance import HarmonicBalance, observation
+from .balance import HarmonicBalance
 from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
 from .fourier import Fourier, default_nt
 from .options import SolverOptions
 from .peak import insert_peaks, refine_peaks
+from .ports import observation
 from .small import make_corrector
 from .stability import STABLE, UNKNOWN
 from .stability_path import HOW_NONE, StabilityPath

@@ -20,8 +20,9 @@ import scipy.sparse as sp
 
 from ..errors import InputError, SolveError, check_int
 from .aft import aft, work_per_cycle
-from .balance import loop_dissipation, observation
 from .fourier import Fourier
+from .loops import loop_dissipation
+from .ports import observation
 from .system import System
 
 TWO_PI = 2.0 * np.pi

@@ -55,20 +55,17 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import InputError, check_choice, check_int, check_range
-from .balance import observation
 from .epmc import TWO_PI, Epmc
 from .epmc_condensed import EpmcCondensed
 from .fourier import Fourier
 from .nlmode_branch import POINT_ARRAYS, NlModeBranch
 from .nlmode_corrector import Snes
+from .ports import observation
 from .system import System
 
 log = logging.getLogger(__name__)
 
 __all__ = [
-    "Epmc",
-    "EpmcCondensed",
-    "NlModeBranch",
     "linear_modes",
     "make_problem",
     "nonlinear_mode",
@@ -379,6 +376,24 @@ def nonlinear_mode(
                     Ye, ok_e, its_e = snes.solve(Yg)
                     if ok_e:
                         record(snes.unscaled(Ye)[0], a1, its_e)
+                        break
+                    # the point exactly at the largest amplitude did not converge: the
+                    # converged step past it ends the backbone, so the range is covered
+                    log.info(
+                        "the point at the largest amplitude %.4g did not converge; the "
+                        "backbone ends at the converged step past it (%.4g)",
+                        a1,
+                        np.exp(Yn[-1]),
+                    )
+                    try:
+                        record(snes.unscaled(Yn)[0], float(np.exp(Yn[-1])), its)
+                    except _Lost:
+                        raise _Stop(
+                            f"the corrector failed at the largest amplitude {a1:.4g} and "
+                            "the step past it loses contact: the backbone ends at "
+                            f"{np.exp(Y[-1]):.4g}",
+                            True,
+                        ) from None
                     break
                 if Yn[-1] < s0:
                     raise _Stop("the backbone turned back below the smallest amplitude", False)

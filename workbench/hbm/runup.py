@@ -38,7 +38,7 @@ import numpy as np
 from ..contact import get_law
 from ..contact.march import specialise
 from ..errors import InputError, SolveError, check_int, check_range
-from .balance import excitation_vector, observation
+from .ports import excitation_vector, observation
 from .system import System
 
 

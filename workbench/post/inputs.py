@@ -134,7 +134,7 @@ def used_inputs(
     names = KIND_OPTIONS.get(kind, KIND_OPTIONS["comparison"])
     dampers = list(values.get("dampers") or [])
     if kind == "robustness":
-        from ..study_options import CASES
+        from ..hard_cases import CASES
 
         dampers = sorted({CASES[n].damper for n in values.get("hard-cases") or [] if n in CASES})
     shapes = [get_shape(d) for d in dampers if d in shape_names()]

@@ -29,8 +29,6 @@ from ..io import write_text
 from .results import STATUS_KEYS, STATUS_NAMES, CaseResult, StudyResults, family_name
 
 __all__ = [
-    "STATUS_KEYS",
-    "STATUS_NAMES",
     "PeakCurve",
     "SweepCurve",
     "Table",

@@ -107,7 +107,8 @@ def write_pvd(path: str | Path, entries: list[tuple[float, str]], comment: str =
 
 def write_mesh_vtu(msh_path: str | Path, vtu_path: str | Path) -> Path:
     """A gmsh second-order tetrahedral mesh as VTU (quadratic tetrahedra, region tags)."""
-    from ..geometry.mshio import GMSH_TO_VTK_TET10, TET10, gmsh_session
+    from ..geometry.mshio import GMSH_TO_VTK_TET10, TET10
+    from ..geometry.occ import gmsh_session
 
     with gmsh_session() as gmsh:
         gmsh.open(str(msh_path))

@@ -27,7 +27,8 @@ from pathlib import Path
 from typing import Any
 
 from .common import pyplot, save_figure, styled
-from .study_style import _EXTRA_COLORS, FIGSIZE, force_colors
+from .palette import force_colors
+from .study_style import _EXTRA_COLORS, FIGSIZE
 
 ERR_FLOOR = 1e-4  # percent
 QUANTITY_TITLES = {

@@ -41,7 +41,7 @@ def plot_backbones(
 ) -> Path:
     """Frequency, damping ratio, friction energy and contact status against the amplitude.
 
-    ``backbones``: (label, :class:`workbench.hbm.nlmodes.NlModeBranch`) pairs.
+    ``backbones``: (label, :class:`workbench.hbm.nlmode_branch.NlModeBranch`) pairs.
     The horizontal axis is the amplitude of output ``output`` (times
     ``unit_scale``, in ``unit``), logarithmic. The status panel shows the
     share of contact elements in each status for the first backbone.

@@ -67,7 +67,7 @@ from ..post.tables import (
     status_shares_table,
 )
 from . import study_figures as sf
-from .palette import verdict_caption, verdict_counts, verdicts_shown
+from .palette import damper_style, verdict_caption, verdict_counts, verdicts_shown
 from .section_builder import (
     FIGURES,
     OWN_PREFIXES,
@@ -81,6 +81,7 @@ from .section_builder import (
     _peak_sentence,
     _Section,
 )
+from .status_figures import plot_status_map, plot_status_shares
 from .sweep_sections import _sweep
 
 log = logging.getLogger(__name__)
@@ -115,7 +116,7 @@ def _receptances(b: _Builder, variant: str) -> None:
         fs = f"receptance_{_fam_slug(p)}"
         if len(dampers) > 1:
             styles = ", ".join(
-                f"{d} {_LINE_WORDS.get(sf.damper_style(d)[1], '')}".strip() for d in dampers
+                f"{d} {_LINE_WORDS.get(damper_style(d)[1], '')}".strip() for d in dampers
             )
             counts = _counts(cases)
             b.figure(
@@ -248,14 +249,14 @@ def _status(b: _Builder, variant: str) -> None:
                 f"{d} damper, {fam}: contact status of every pair vs frequency at "
                 f"{_forces_text([c.force_n for c in own])} (stuck, stick-slip, partial "
                 "separation, full separation); dashed black line: the resonance." + _failures(own),
-                lambda path, cs=own: sf.plot_status_map(cs, path),
+                lambda path, cs=own: plot_status_map(cs, path),
             )
         b.figure(
             sec,
             f"status_shares_{_fam_slug(p)}",
             f"{fam}: share of the contact pairs in each status at resonance vs force; "
             "colour: status, line style and marker: damper." + _failures(cases),
-            lambda path, cs=cases: sf.plot_status_shares(cs, path),
+            lambda path, cs=cases: plot_status_shares(cs, path),
         )
         b.table(
             sec,

@@ -16,16 +16,21 @@ import numpy as np
 from ..post.results import STATUS_NAMES, CaseResult
 from ..post.tables import status_share_curves
 from .common import pyplot, save_figure, styled
-from .palette import NOT_COMPUTED_COLOR, NOT_COMPUTED_EDGE, RESONANCE_COLOR, STATUS_EDGE
+from .palette import (
+    NOT_COMPUTED_COLOR,
+    NOT_COMPUTED_EDGE,
+    RESONANCE_COLOR,
+    STATUS_COLORS,
+    STATUS_EDGE,
+    damper_style,
+)
 from .study_style import (
     FIGSIZE,
-    STATUS_COLORS,
     _dampers,
     _one_family,
     _one_set,
     _readable_log,
     _side_legends,
-    damper_style,
     status_legend_handles,
 )
 

@@ -36,19 +36,15 @@ from ..post.results import CaseResult
 from ..post.tables import peak_curve, sweep_value
 from .common import pyplot, save_figure, styled
 from .palette import (
+    damper_style,
+    force_colors,
     marker_kwargs,
     peak_marker_legend,
     verdict_counts,
     verdict_legend,
 )
-from .status_figures import plot_status_map, plot_status_shares, status_zoom
 from .study_style import (
-    _EXTRA_COLORS,
-    DAMPER_STYLE,
-    FAMILY_STYLE,
     FIGSIZE,
-    STATUS_COLORS,
-    UNSTABLE_BAND,
     _dampers,
     _draw_branch,
     _failed_suffix,
@@ -59,39 +55,21 @@ from .study_style import (
     _readable_log,
     _side_legends,
     _wants_log,
-    damper_style,
-    force_colors,
-    status_legend_handles,
 )
-from .sweep_figures import option_label, plot_cone_angle_energy, plot_sweep
+from .sweep_figures import option_label
 
 log = logging.getLogger(__name__)
 
 # the styles, the status and the sweep figures live in study_style.py, status_figures.py and
 # sweep_figures.py; every figure stays importable from here
 __all__ = [
-    "DAMPER_STYLE",
-    "FAMILY_STYLE",
-    "FIGSIZE",
-    "STATUS_COLORS",
-    "UNSTABLE_BAND",
-    "_EXTRA_COLORS",
-    "damper_style",
     "failure_notes",
-    "force_colors",
-    "option_label",
-    "plot_cone_angle_energy",
     "plot_energy_vs_force",
     "plot_answer",
     "plot_peak_vs_force",
     "plot_receptance_overlay",
     "plot_receptances",
-    "plot_status_map",
-    "plot_status_shares",
-    "plot_sweep",
     "plot_sweep_receptances",
-    "status_legend_handles",
-    "status_zoom",
 ]
 
 

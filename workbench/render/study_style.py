@@ -22,11 +22,7 @@ from .palette import (
     STATUS_COLORS,
     STATUS_EDGE,
     VERDICTS,
-    damper_style,
-    force_colors,
     verdict,
-    verdict_counts,
-    verdict_legend,
     verdict_runs,
 )
 
@@ -44,14 +40,8 @@ __all__ = [
     "DAMPER_STYLE",
     "FAMILY_STYLE",
     "FIGSIZE",
-    "STATUS_COLORS",
-    "STATUS_EDGE",
     "UNSTABLE_BAND",
-    "damper_style",
-    "force_colors",
     "status_legend_handles",
-    "verdict_counts",
-    "verdict_legend",
 ]
 
 

@@ -17,16 +17,8 @@ from ..errors import InputError
 from ..post.results import CaseResult, family_name
 from ..post.tables import sweep_curve, sweep_value
 from .common import pyplot, save_figure, styled
-from .palette import marker_kwargs
-from .study_style import (
-    DAMPER_STYLE,
-    FAMILY_STYLE,
-    _dampers,
-    _readable_log,
-    _wants_log,
-    damper_style,
-    force_colors,
-)
+from .palette import damper_style, force_colors, marker_kwargs
+from .study_style import DAMPER_STYLE, FAMILY_STYLE, _dampers, _readable_log, _wants_log
 
 
 def option_label(option: str) -> tuple[str, str]:

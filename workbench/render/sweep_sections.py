@@ -16,6 +16,7 @@ from ..post.tables import Table, families, slug, sweep_curves, sweep_table
 from . import study_figures as sf
 from .palette import verdict_caption, verdict_counts
 from .section_builder import _Builder, _failures, _fam_slug, _forces_text
+from .sweep_figures import option_label, plot_cone_angle_energy, plot_sweep
 
 
 def _cone_design(results: StudyResults, geometry_dirs: dict[str, Path]) -> tuple[float, ...]:
@@ -38,7 +39,7 @@ def _cone_design(results: StudyResults, geometry_dirs: dict[str, Path]) -> tuple
 
 def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
     r = b.results
-    name, unit = sf.option_label(option)
+    name, unit = option_label(option)
     curves = sweep_curves(r, option)
     values = sorted({v for sc in curves for v in sc.value.tolist()})
     sec = b.section(
@@ -57,7 +58,7 @@ def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
         f"Vibration amplitude at resonance, harmonic 1 (mm, top) and resonance frequency "
         f"(Hz, bottom) vs {name} ({unit}); one column per family, one curve per damper; "
         "hollow marker: unstable peak, half filled: unknown." + _failures(r.cases),
-        lambda path: sf.plot_sweep(r.cases, option, path),
+        lambda path: plot_sweep(r.cases, option, path),
     )
     b.table(
         sec,
@@ -77,7 +78,7 @@ def _sweep(b: _Builder, option: str, geometry_dirs: dict[str, Path]) -> None:
             "above the largest kinematic slip per unit in-phase radial platform motion "
             f"from the paper's eq. 6 and the exact 3-D rigid-body kinematics (beta = "
             f"{beta:g} deg, R1 = {r1:g} mm, L = {length:g} mm)." + _failures(cones),
-            lambda path: sf.plot_cone_angle_energy(
+            lambda path: plot_cone_angle_energy(
                 cones, path, beta_deg=beta, r1_mm=r1, length_mm=length, option=option
             ),
         )

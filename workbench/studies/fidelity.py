@@ -50,7 +50,6 @@ from ..io import digest, write_json
 from ..log import bars_enabled, progress_bar
 from ..post.fidelity import (
     KNOBS,
-    QUANTITIES,
     STAGES,
     Setting,
     condition_name,
@@ -58,7 +57,6 @@ from ..post.fidelity import (
     level_label,
     relative_errors,
     setting_row,
-    worst,
 )
 from ..post.pareto import pareto_front, pick_cheapest
 from ..post.results import CaseResult
@@ -456,21 +454,4 @@ def write_fidelity_outputs(
 
 __all__ = [
     "run_fidelity",
-    "pareto_front",
-    "pick_cheapest",
-    "propose_combination",
-    "relative_errors",
-]
-
-# the names below moved to post/ and studies/fidelity_plan.py; kept importable from here
-__all__ += [
-    "KNOBS",
-    "QUANTITIES",
-    "STAGES",
-    "Setting",
-    "condition_name",
-    "ladder_self_errors",
-    "level_label",
-    "setting_row",
-    "worst",
 ]

@@ -120,7 +120,7 @@ def study_backbones(
     not in ``prepared`` are prepared from the study's FE cache. Rank 0 only
     under MPI (the others return empty results).
     """
-    from ..hbm.nlmodes import NlModeBranch
+    from ..hbm.nlmode_branch import NlModeBranch
     from ..hbm.synthesis import synthesize
     from ..pipeline import prepare_model
     from ..post.results import CaseResult, family_name
@@ -291,7 +291,7 @@ def cost_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
 
 def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
     """Report sections for the backbones and the synthesis check (figures, tables, text)."""
-    from ..hbm.nlmodes import NlModeBranch
+    from ..hbm.nlmode_branch import NlModeBranch
     from ..post.results import CaseResult
     from ..post.tables import write_rows_csv
     from ..render.nlmode_figures import plot_backbones, plot_synthesis, plot_synthesis_errors
@@ -494,7 +494,7 @@ def fidelity_entry(comp, base, ref, out: str | Path):
     flags itself not valid keeps its errors (the chart shows what it costs
     to trust it anyway) and says so in ``failed``-free ``members``.
     """
-    from ..hbm.nlmodes import NlModeBranch
+    from ..hbm.nlmode_branch import NlModeBranch
     from ..hbm.synthesis import synthesize
     from ..pipeline import prepare_model
     from ..post.fidelity import QUANTITIES, Setting, condition_name

@@ -46,9 +46,9 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError, SolveError
+from ..hard_cases import CASES, METHODS
 from ..io import write_json
 from ..post.tables import write_rows_csv
-from ..study_options import CASES, METHODS, HardCase
 from .outputs import write_manifest_and_report
 from .robustness_cells import (
     ENERGY_TOL,
@@ -56,18 +56,10 @@ from .robustness_cells import (
     Problem,
     _cell_key,
     classify,
-    method_options,
     run_cell,
 )
 from .robustness_time import (
-    TIME_MODELS,
-    TimeModel,
-    branch_amplitudes_at,
-    compare_with_branch,
-    suspect_points,
-    time_check,
     time_checks,
-    turning_points,
 )
 from .spec import StudySpec
 
@@ -445,26 +437,6 @@ def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str
 
 
 __all__ = [
-    "METHODS",
-    "CASES",
-    "TIME_MODELS",
     "run_robustness",
     "method_map",
-    "run_cell",
-    "turning_points",
-    "time_check",
-    "time_checks",
-    "Problem",
-    "method_options",
-    # moved to studies/robustness_time.py; kept importable from here
-    "TimeModel",
-    "branch_amplitudes_at",
-    "compare_with_branch",
-    "suspect_points",
-    # named in workbench/study_options.py, next to the options that list them
-    "HardCase",
-    # a cell's solve and verdict: studies/robustness_cells.py
-    "ENERGY_TOL",
-    "STATUSES",
-    "classify",
 ]

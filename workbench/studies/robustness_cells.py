@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, SolveError
+from ..hard_cases import METHODS
 from ..io import digest
-from ..study_options import METHODS
 from .robustness_time import turning_points
 
 log = logging.getLogger(__name__)

@@ -16,7 +16,6 @@ from pathlib import Path
 from typing import Any
 
 from ..assembly.screen import ScreenResult, linear_pair, screen
-from ..post.screen_table import COLUMNS, format_cell, table
 from .plan import Case, plan
 from .spec import StudySpec
 
@@ -172,13 +171,10 @@ def run_screen(spec: StudySpec, out: str | Path, *, comm=None) -> dict[str, Any]
 
 # the table's formatting lives in post/screen_table.py; kept importable from here
 __all__ = [
-    "COLUMNS",
-    "format_cell",
     "rigid_bound_model",
     "run_screen",
     "screen_key",
     "screen_prepared",
     "screen_row",
     "study_screens",
-    "table",
 ]

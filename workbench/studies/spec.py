@@ -17,26 +17,12 @@ from typing import Any
 
 from ..config import read_toml
 from ..errors import InputError, check_choice, check_int, check_range, did_you_mean
+from ..geometry.params import DAMPERS
 from ..limits import BAND_RATIO_MAX, BAND_RATIO_WHY, EXTREME_HINT
-from ..study_options import (
-    BY_NAME,
-    DAMPERS,
-    KINDS,
-    OPTIONS,
-    ROBUSTNESS_CASES,
-    ROBUSTNESS_METHODS,
-    Option,
-)
+from ..study_options import BY_NAME, OPTIONS, Option
 
 # the options table lives in workbench/study_options.py (plain data the figures read too)
 __all__ = [
-    "BY_NAME",
-    "DAMPERS",
-    "KINDS",
-    "OPTIONS",
-    "ROBUSTNESS_CASES",
-    "ROBUSTNESS_METHODS",
-    "Option",
     "StudySpec",
     "add_arguments",
     "check_option",

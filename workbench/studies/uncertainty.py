@@ -60,9 +60,7 @@ from ..io import write_json
 from ..log import bars_enabled
 from ..post.results import CaseResult, family_name
 from ..post.uncertainty import (
-    DIST_KINDS,
     INPUT_LABELS,
-    INPUTS,
     QUANTITIES,
     Design,
     Distribution,
@@ -73,7 +71,6 @@ from ..post.uncertainty import (
     headline,
     index_rows,
     make_design,
-    parse_distribution,
     ranking_confidence,
     sobol_indices,
     statistics,
@@ -81,10 +78,8 @@ from ..post.uncertainty import (
 )
 from .plan import make_case
 from .schedule import (
-    WorkCounter,
     run_tasks,
     schedule_efficiency,
-    simulate_schedule,
     study_comm,
 )
 from .spec import StudySpec
@@ -471,36 +466,7 @@ def write_uncertainty_outputs(
 
 # moved to post/uncertainty.py and studies/schedule.py; kept importable from here
 __all__ = [
-    "DIST_KINDS",
-    "INPUTS",
-    "INPUT_LABELS",
-    "QUANTITIES",
-    "Design",
-    "Distribution",
-    "WorkCounter",
     "analyse",
-    "analysis_summary",
-    "answer_rows",
-    "driver",
-    "driver_verdict",
-    "headline",
-    "index_rows",
-    "make_design",
-    "parse_distribution",
-    "run_tasks",
     "run_uncertainty",
-    "schedule_efficiency",
-    "simulate_schedule",
-    "sobol_indices",
-    "statistics",
-    "stats_rows",
-    "study_distributions",
     "write_h5",
-    # the samples: studies/uq_samples.py
-    "Sample",
-    "base_settings",
-    "nominal_contact",
-    "plan_samples",
-    "prepare_sample",
-    "sample_settings",
 ]

@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._common import SLIP_TOL, begin
+from . import SLIP_TOL
+from ._common import begin
 
 NAME = "circular"
 N_STATE = 4

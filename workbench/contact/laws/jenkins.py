@@ -11,7 +11,8 @@ from __future__ import annotations
 
 from numba import njit
 
-from ._common import SLIP_TOL, begin
+from . import SLIP_TOL
+from ._common import begin
 
 NAME = "decoupled"
 N_STATE = 4
