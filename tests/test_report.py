@@ -11,17 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from tests.conftest import run_upd
-
-CHROMIUM_FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
+from workbench.render.browser import FLAGS
 
 
 def _study_dir(root: Path) -> Path:
@@ -109,7 +99,7 @@ def _chromium(flags: list[str], url: str, tmp_path: Path, check) -> object:
     for attempt in range(3):
         profile = f"--user-data-dir={tmp_path / f'profile{attempt}'}"
         r = subprocess.run(
-            ["chromium", *CHROMIUM_FLAGS, profile, "--virtual-time-budget=10000", *flags, url],
+            ["chromium", *FLAGS, profile, "--virtual-time-budget=10000", *flags, url],
             capture_output=True,
             text=True,
             timeout=180,

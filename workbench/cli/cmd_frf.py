@@ -44,35 +44,33 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def add_model_values(p: argparse.ArgumentParser) -> None:
-    """--levels, --band, --harmonics, --nt: the model file's values from the command line."""
-    from ..limits import FRF_BAND_RATIO_MAX, FRF_BAND_WHY, MAX_HARMONIC, MAX_NT, NT_WHY
+def add_levels_and_band(p, lead: str = "") -> None:
+    """--levels and --band: a model file's levels and band from the command line
+    (``upd frf`` and ``upd nlmodes``; ``lead`` starts their help)."""
+    from ..limits import FRF_BAND_RATIO_MAX, FRF_BAND_WHY
     from .values import Value, add_value
 
     add_value(
         p,
         "--levels",
         Value("floats", 0.0, None, lo_open=True),
-        "excitation levels instead of the file's [excitation] levels (at most 10^4 x the "
-        "largest slip force mu N0 over the force per unit level)",
+        f"{lead}excitation levels instead of the file's [excitation] levels (at most 10^4 x "
+        "the largest slip force mu N0 over the force per unit level)",
         metavar="L1,L2,...",
     )
-    add_value(
-        p,
-        "--band",
-        Value(
-            "floats",
-            0.0,
-            None,
-            lo_open=True,
-            unit="Hz",
-            count=2,
-            ratio=FRF_BAND_RATIO_MAX,
-            why=FRF_BAND_WHY,
-        ),
-        "frequency band F0 < F1 instead of [band]",
-        metavar="F0,F1",
-    )
+    band = Value(
+        "floats", 0.0, None, lo_open=True, unit="Hz", count=2, ratio=FRF_BAND_RATIO_MAX,
+        why=FRF_BAND_WHY,
+    )  # fmt: skip
+    add_value(p, "--band", band, f"{lead}frequency band F0 < F1 instead of [band]", metavar="F0,F1")
+
+
+def add_model_values(p: argparse.ArgumentParser) -> None:
+    """--levels, --band, --harmonics, --nt: the model file's values from the command line."""
+    from ..limits import MAX_HARMONIC, MAX_NT, NT_WHY
+    from .values import Value, add_value
+
+    add_levels_and_band(p)
     add_value(
         p,
         "--harmonics",

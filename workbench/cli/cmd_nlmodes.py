@@ -57,8 +57,9 @@ RANGE_WHY = (
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from ..limits import ENTRY_MAX, FRF_BAND_RATIO_MAX, FRF_BAND_WHY
+    from ..limits import ENTRY_MAX
     from ..studies.spec import add_arguments as add_study_options
+    from .cmd_frf import add_levels_and_band
     from .values import Value, add_value
 
     p.add_argument(
@@ -96,29 +97,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="N",
         default="40",
     )
-    add_value(
-        g,
-        "--levels",
-        Value("floats", 0.0, None, lo_open=True),
-        "model file: excitation levels instead of the file's",
-        metavar="L1,L2,...",
-    )
-    add_value(
-        g,
-        "--band",
-        Value(
-            "floats",
-            0.0,
-            None,
-            lo_open=True,
-            unit="Hz",
-            count=2,
-            ratio=FRF_BAND_RATIO_MAX,
-            why=FRF_BAND_WHY,
-        ),
-        "model file: band F0 < F1 instead of [band]",
-        metavar="F0,F1",
-    )
+    add_levels_and_band(g, "model file: ")
     g.add_argument(
         "--compare",
         action="store_true",

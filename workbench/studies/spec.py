@@ -257,25 +257,33 @@ def _check_kind_options(spec: StudySpec) -> None:
             "no sweep unless kind = 'sweep'",
             f"kind is {spec.kind!r}, which does not sweep",
         )
-    from ..post.uncertainty import parse_distribution
-
     for i, text in enumerate(spec.levels_harmonics):
         parse_harmonics(text, f"levels-harmonics[{i}]")
-    for name, (vlo, vhi) in UQ_VALID.items():
-        opt = f"uq-{name}"
-        text = getattr(spec, opt.replace("-", "_"))
-        lo, hi = parse_distribution(opt, text).support
-        if (
-            lo < vlo
-            or (vlo == 0.0 and name in ("cf", "kt", "kn") and lo <= 0.0)
-            or (vhi is not None and hi > vhi)
-        ):
-            raise InputError(
-                opt,
-                text,
-                f"a distribution within [{vlo:g}, {vhi if vhi is not None else 'inf'}]"
-                " (give bounds)",
-            )
+    for name in UQ_VALID:
+        uq_distribution(spec, name)
+
+
+def uq_distribution(spec: StudySpec, name: str):
+    """The distribution of uncertain input ``name`` (``uq-<name>``), checked against its
+    physical range (:data:`UQ_VALID`): a ``workbench.post.uncertainty.Distribution``."""
+    from ..post.uncertainty import parse_distribution
+
+    opt = f"uq-{name}"
+    text = getattr(spec, opt.replace("-", "_"))
+    d = parse_distribution(opt, text)
+    lo, hi = d.support
+    vlo, vhi = UQ_VALID[name]
+    if (
+        lo < vlo
+        or (vlo == 0.0 and name in ("cf", "kt", "kn") and lo <= 0.0)
+        or (vhi is not None and hi > vhi)
+    ):
+        raise InputError(
+            opt,
+            text,
+            f"a distribution within [{vlo:g}, {vhi if vhi is not None else 'inf'}] (give bounds)",
+        )
+    return d
 
 
 def load_study(path: str | Path | None, cli_values: Mapping[str, Any] | None = None) -> StudySpec:

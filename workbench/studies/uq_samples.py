@@ -22,31 +22,16 @@ import numpy as np
 
 from ..errors import InputError
 from ..io import digest
-from ..post.uncertainty import Design, Distribution, parse_distribution
+from ..post.uncertainty import Design, Distribution
 from .plan import Case, make_case
-from .spec import UQ_VALID, StudySpec
+from .spec import StudySpec, uq_distribution
 
 
 def study_distributions(spec: StudySpec) -> dict[str, Distribution]:
     """The distributions of the study's uncertain inputs (``uq-inputs``), checked."""
     out: dict[str, Distribution] = {}
     for name in spec.uq_inputs:
-        opt = f"uq-{name}"
-        d = parse_distribution(opt, getattr(spec, opt.replace("-", "_")))
-        lo, hi = d.support
-        vlo, vhi = UQ_VALID[name]
-        if (
-            lo < vlo
-            or (vlo == 0.0 and name in ("cf", "kt", "kn") and lo <= 0.0)
-            or (vhi is not None and hi > vhi)
-        ):
-            raise InputError(
-                opt,
-                getattr(spec, opt.replace("-", "_")),
-                f"a distribution within [{vlo:g}, {vhi if vhi is not None else 'inf'}]"
-                " (give bounds)",
-            )
-        out[name] = d
+        out[name] = uq_distribution(spec, name)
     if not out:
         raise InputError("uq-inputs", spec.uq_inputs, "at least one uncertain input")
     return out
