@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from tests.conftest import ROOT, run_upd
@@ -126,3 +128,41 @@ def test_shipped_study_files_load_and_every_case_fits_the_groove(path):
             req["damper"], req["geometry_file"], req["overrides"], req["size_mm"]
         )
         make_layout(gp)
+
+
+def test_the_case_key_covers_every_source_that_shapes_a_curve(monkeypatch):
+    """Every source file of the contact laws (a sub-package), the harmonic balance (but
+    the nonlinear modes), the assembly and the model pipeline is read into a case's
+    cache key: editing any of them recomputes the cases."""
+    import workbench.io as wio
+    from workbench.studies.plan import NLMODE_SOURCES, solver_code_version
+
+    read = set()
+    real = wio.file_digest
+
+    def spy(path, n=16):
+        read.add(Path(path).resolve())
+        return real(path, n)
+
+    monkeypatch.setattr(wio, "file_digest", spy)
+    solver_code_version()
+    pkg = Path(wio.__file__).resolve().parent
+    want = {
+        p.resolve()
+        for d in ("contact", "hbm", "assembly", "pipeline")
+        for p in (pkg / d).rglob("*.py")
+        if not (d == "hbm" and p.name in NLMODE_SOURCES)
+    }
+    assert any(p.parent.name == "laws" for p in want)  # the sub-package is there to miss
+    assert not want - read, sorted(str(p.relative_to(pkg)) for p in want - read)
+
+
+def test_code_version_counts_sub_packages(tmp_path):
+    from workbench.io import code_version
+
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "a.py").write_text("A = 1\n")
+    (tmp_path / "sub" / "b.py").write_text("B = 1\n")
+    v0 = code_version(tmp_path)
+    (tmp_path / "sub" / "b.py").write_text("B = 2\n")
+    assert code_version(tmp_path) != v0

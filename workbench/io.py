@@ -90,14 +90,15 @@ def code_version(
 ) -> str:
     """Package version plus a hash of the sources that produce a cached result.
 
-    ``names``: the files of ``package_dir`` that count (default: every
-    ``*.py`` in it). A change to any of them changes the version, so every
-    cache keyed on it is rebuilt.
+    ``names``: the files of ``package_dir`` that count, relative to it
+    (default: every ``*.py`` in it and in its sub-packages, e.g. the contact
+    laws of ``contact/laws/``). A change to any of them changes the version,
+    so every cache keyed on it is rebuilt.
     """
     from . import __version__
 
     here = Path(package_dir)
-    files = sorted(here.glob("*.py")) if names is None else [here / n for n in names]
+    files = sorted(here.rglob("*.py")) if names is None else [here / n for n in names]
     parts = [file_digest(f, 8) for f in files if f.is_file()]
     return f"{__version__}+{tag}{digest(parts, 8)}"
 

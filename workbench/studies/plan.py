@@ -93,18 +93,25 @@ NLMODE_SOURCES = (
 def solver_code_version() -> str:
     """A hash of the sources that turn a reduced model into a case's curve.
 
-    Part of every case's cache key: a change to the contact law, the
-    harmonic balance, the assembly or this runner recomputes the cases
-    (the meshes and reduced models have their own keys and stay).
+    Part of every case's cache key: a change to the contact laws, the
+    harmonic balance, the assembly, the model pipeline (which calls the
+    solve) or this runner recomputes the cases (the meshes and reduced
+    models have their own keys and stay). Sub-packages count.
     """
     from ..io import code_version
 
     root = Path(__file__).resolve().parents[1]
     parts = [code_version(root / pkg) for pkg in ("contact", "assembly")]
     # the nonlinear modes (NLMODE_SOURCES) do not shape a forced response
-    hbm = tuple(p.name for p in sorted((root / "hbm").glob("*.py")) if p.name not in NLMODE_SOURCES)
-    parts.insert(1, code_version(root / "hbm", hbm))
+    hbm_dir = root / "hbm"
+    hbm = tuple(
+        str(p.relative_to(hbm_dir))
+        for p in sorted(hbm_dir.rglob("*.py"))
+        if p.name not in NLMODE_SOURCES
+    )
+    parts.insert(1, code_version(hbm_dir, hbm))
     parts.append(code_version(root / "studies", ("plan.py", "runner.py")))
+    parts.append(code_version(root / "pipeline"))
     return digest(parts, 12)
 
 
