@@ -192,6 +192,26 @@ def test_a_failed_mesh_leaves_its_models_to_the_main_process():
     assert sch.pending == [] and sch.running == {}  # neither model's reductions attempted
 
 
+def test_a_pool_broken_by_an_idle_worker_leaves_the_work_to_the_main_process():
+    """A worker killed while it waits for work breaks the pool with no future to tell:
+    the next submission raises. The scheduler stops there and lists the unstarted work
+    as failed (the main process does it), never an internal error."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    class BrokenPool(FakePool):
+        def submit(self, fn, *args):
+            raise BrokenProcessPool("A child process terminated abruptly")
+
+    tasks = [Task("rig", FakeCase("a"), n_dofs=10, label="rig a"),
+             Task("damper", FakeCase("a"), n_dofs=10, label="damper a")]  # fmt: skip
+    sch = scheduler(tasks, budget=1e9)
+    sch.pool = BrokenPool()
+    sch.start()
+    assert sch.abandoned
+    assert sorted(sch.res["failed"]) == ["damper a", "rig a"]
+    assert sch.pending == [] and sch.running == {}
+
+
 def test_a_task_error_survives_the_trip_back_from_a_worker(monkeypatch):
     """The pool pickles a task's exception; ours cannot be rebuilt from a pickle (it
     would come back as a broken pool), so the worker sends a RuntimeError that carries

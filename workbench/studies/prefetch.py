@@ -379,7 +379,13 @@ class _Scheduler:
             self.finish(t, secs)
 
     def start(self) -> None:
-        """Start the longest pending tasks that may run (free worker, memory, dependencies)."""
+        """Start the longest pending tasks that may run (free worker, memory, dependencies).
+
+        A worker that died while idle breaks the pool without a future to say so: the
+        submission raises, and the work is left to the main process as in :meth:`collect`.
+        """
+        from concurrent.futures.process import BrokenProcessPool
+
         ready = sorted((t for t in self.pending if t.kind != "reductions"), key=lambda t: -t.cost)
         for t in ready:
             if len(self.running) >= self.n_workers:
@@ -387,8 +393,12 @@ class _Scheduler:
             in_use = sum(r.memory for r in self.running.values())
             if self.running and in_use + t.memory > self.budget:
                 continue  # waits for memory; a task too large for the budget runs alone
+            try:
+                fut = self.pool.submit(_in_worker, t.kind, t.case, str(self.out), self.force)
+            except BrokenProcessPool as e:  # t stays pending: listed by abandon()
+                self.abandon(str(e) or "the process pool broke")
+                return
             self.pending.remove(t)
-            fut = self.pool.submit(_in_worker, t.kind, t.case, str(self.out), self.force)
             self.running[fut] = t
 
 
