@@ -21,6 +21,7 @@ from ..post.fidelity import (
     condition_name,
     ladder_self_errors,
     level_label,
+    limit_uncertainty_pct,
 )
 from ..post.tables import write_rows_csv
 
@@ -233,6 +234,7 @@ def fidelity_outputs(
         f"reference: {_kv(summary['reference'])}",
         f"Pareto front (worst error): {', '.join(summary['pareto_front'])}",
     ]
+    head.append(_reference_vs_limit(by_label.get(ref.label, {}), summary["limit"]))
     if summary.get("picked"):
         head.append(summary["picked"]["reason"])
     timings = {
@@ -326,6 +328,21 @@ def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
             }
         ],
     }
+
+
+def _reference_vs_limit(row: dict[str, Any], limit: dict[str, Any]) -> str:
+    """One line: the reference's error against the limit per quantity, +- its uncertainty."""
+    parts = []
+    for q, name, _ in QUANTITIES:
+        e, u = row.get(f"err_lim_{q}_pct"), limit_uncertainty_pct(limit, q)
+        flag = all(c.get(q, {}).get("asymptotic") for c in limit.values())
+        if e is None:
+            parts.append(f"{name} n/a")
+        elif flag and u is not None:
+            parts.append(f"{name} {e:.3g} % (+- {u:.2g} %)")
+        else:
+            parts.append(f"{name} {e:.3g} % (not asymptotic: against the finest levels)")
+    return "reference vs the extrapolated limit (worst condition): " + "; ".join(parts)
 
 
 def damper_line(summary: dict[str, Any]) -> str:
