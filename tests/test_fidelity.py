@@ -319,6 +319,37 @@ def test_tiny_tolerance_pick_is_the_cheapest_meeting(tiny):
         assert comb["time_s"] > 0 and comb["hbm_s"] > 0
 
 
+def test_tiny_errors_against_the_limit(tiny):
+    """Each knob's limit is extrapolated or flagged; every setting has errors against it."""
+    d, s = tiny
+    qs = ("peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj")
+    assert set(s["knob_limits"]) == {"harmonics", "nt"}
+    for lim in s["knob_limits"].values():
+        for byq in lim.values():
+            for q in qs:
+                e = byq[q]
+                if e["asymptotic"]:  # an extrapolation: with its order and uncertainty
+                    assert e["method"] == "richardson" and 0.5 <= e["order"] <= 8
+                    assert e["uncertainty"] >= 0 and e["reason"] == ""
+                else:  # no made-up number: the finest level, with the reason
+                    assert e["method"] == "finest level" and e["value"] == e["finest"]
+                    assert e["reason"]
+    rows = _by_label(s)
+    for c, byq in s["limit"].items():
+        for q in qs:
+            e = byq[q]
+            flags = [s["knob_limits"][k][c][q]["asymptotic"] for k in s["knob_limits"]]
+            assert e["asymptotic"] == all(flags)
+            assert (e["uncertainty"] is None) == (not all(flags))
+    ref = rows["reference"]
+    for q in qs:  # the reference itself is measured against the limit
+        assert ref[f"err_lim_{q}_pct"] is not None and ref[f"err_lim_{q}_pct"] >= 0
+    assert rows["nt 16"]["max_error_vs_limit_pct"] > 0
+    assert (d / "out" / "tables" / "fidelity_limits.csv").is_file()
+    man = json.loads((d / "out" / "manifest.json").read_text())
+    assert "limits" in [x["id"] for x in man["sections"]]
+
+
 def test_tiny_outputs_and_report(tiny):
     d, s = tiny
     out = d / "out"

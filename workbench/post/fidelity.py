@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..io import digest
+from .extrapolation import LimitEstimate, richardson
 from .results import CaseResult
 
 KNOBS = ("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper")
@@ -78,6 +79,8 @@ class Setting:
     results: dict[str, CaseResult] = field(default_factory=dict)  # condition -> case
     times: dict[str, float] = field(default_factory=dict)  # stage -> s (charged)
     errors: dict[str, dict[str, float | None]] = field(default_factory=dict)  # cond -> q -> %
+    # against the extrapolated limit (see ``combined_limits``): cond -> q -> %
+    limit_errors: dict[str, dict[str, float | None]] = field(default_factory=dict)
 
     @property
     def key(self) -> str:
@@ -98,6 +101,10 @@ class Setting:
     def error(self, q: str | None = None) -> float | None:
         """Largest error (percent) over the conditions, of quantity ``q`` or of all three."""
         return worst(self.errors, q)
+
+    def limit_error(self, q: str | None = None) -> float | None:
+        """Largest error (percent) against the extrapolated limit, of ``q`` or of all three."""
+        return worst(self.limit_errors, q)
 
 
 def worst(errors: dict[str, dict[str, float | None]], q: str | None = None) -> float | None:
@@ -141,6 +148,127 @@ def ladder_self_errors(ladders: dict[str, list[Setting]]) -> dict[str, list[floa
     }
 
 
+def knob_h(knob: str, v: Any) -> float | None:
+    """The fineness h of one knob level (smaller is finer) for Richardson extrapolation.
+
+    mesh size: the size in mm; modes: 1/modes; harmonics: 1/H of the highest
+    harmonic H; nt: 1/nt; points per line: 1/points. None for the rigid/flexible
+    damper, which is no ladder of a fineness.
+    """
+    if knob == "mesh-size":
+        return float(v)
+    if knob == "harmonics":
+        return 1.0 / max(v) if max(v) > 0 else None
+    if knob in ("modes", "nt", "points-per-line"):
+        return 1.0 / int(v) if v else None
+    return None
+
+
+def _value(st: Setting, cond: str, q: str) -> float | None:
+    r = st.results.get(cond)
+    if r is None or r.branch.failed:
+        return None
+    v = r.summary().get(q)
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+def ladder_limits(ladders: dict[str, list[Setting]]) -> dict[str, dict[str, dict[str, Any]]]:
+    """knob -> condition -> quantity -> :class:`LimitEstimate` from the knob's finest levels.
+
+    Each knob's ladder (the other knobs at the base) is extrapolated with the
+    observed order (``workbench.post.extrapolation.richardson``). A knob with
+    no fineness (rigid damper) or two levels only falls back to its finest
+    level, flagged not asymptotic.
+    """
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for knob, lad in ladders.items():
+        hs = [knob_h(knob, st.values[knob]) for st in lad]
+        out[knob] = {}
+        for cond in lad[-1].results:
+            out[knob][cond] = {}
+            for q, _, _ in QUANTITIES:
+                vals = [_value(st, cond, q) for st in lad]
+                if any(h is None for h in hs):
+                    v = vals[-1]
+                    est = LimitEstimate(
+                        v, None, None, False, "finest level", "no fineness to extrapolate", v, 1
+                    )
+                else:
+                    est = richardson(hs, vals)
+                out[knob][cond][q] = est
+    return out
+
+
+def combined_limits(
+    ref: Setting, ladders: dict[str, list[Setting]], limits: dict[str, dict[str, dict[str, Any]]]
+) -> dict[str, dict[str, dict[str, Any]]]:
+    """condition -> quantity -> the limit of every knob at once, around the reference.
+
+    Assumes the knobs' errors add (first order): the limit is the reference's
+    value plus, per knob, its extrapolated limit minus its finest level's
+    value (both with the other knobs at the base). The uncertainty is the sum
+    of the knobs' (conservative). ``asymptotic`` is True only if every knob's
+    is; a knob that falls back adds no correction and no known uncertainty,
+    so the uncertainty is then None. A knob whose finest level is not the
+    reference's value (the base is finer) cannot be used: flagged too.
+    """
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for cond in ref.results:
+        out[cond] = {}
+        for q, _, _ in QUANTITIES:
+            v = _value(ref, cond, q)
+            unc: float | None = 0.0
+            asym, why = v is not None, [] if v is not None else ["no reference value"]
+            orders: dict[str, float | None] = {}
+            for knob, lad in ladders.items():
+                est = limits[knob].get(cond, {}).get(q)
+                orders[knob] = est.order if est is not None else None
+                if lad[-1].values[knob] != ref.values[knob]:
+                    asym, unc = False, None
+                    why.append(f"{knob}: the base is finer than its levels")
+                    continue
+                if est is not None and est.finest != _value(lad[-1], cond, q):
+                    est = None  # the finest level failed: its correction has no anchor
+                if est is None or not est.asymptotic:
+                    asym, unc = False, None
+                    why.append(f"{knob}: {est.reason if est is not None else 'no value'}")
+                    continue
+                if v is not None:
+                    v += est.value - est.finest
+                if unc is not None:
+                    unc += est.uncertainty
+            out[cond][q] = {
+                "value": v,
+                "uncertainty": unc,
+                "asymptotic": asym,
+                "orders": orders,
+                "reason": "; ".join(why),
+            }
+    return out
+
+
+def limit_errors(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) -> dict:
+    """condition -> quantity -> |q - q_lim| / |q_lim| in percent (None: nothing to compare)."""
+    out: dict[str, dict[str, float | None]] = {}
+    for cond in st.results:
+        out[cond] = {}
+        for q, _, _ in QUANTITIES:
+            a, lim = _value(st, cond, q), combined.get(cond, {}).get(q, {}).get("value")
+            out[cond][q] = abs(a - lim) / abs(lim) * 100.0 if a is not None and lim else None
+    return out
+
+
+def limit_uncertainty_pct(combined: dict[str, dict[str, dict[str, Any]]], q: str) -> float | None:
+    """The largest uncertainty of the limit of ``q`` over the conditions, percent of |limit|."""
+    us = []
+    for c in combined.values():
+        d = c.get(q, {})
+        if d.get("uncertainty") is None or not d.get("value"):
+            return None
+        us.append(abs(d["uncertainty"]) / abs(d["value"]) * 100.0)
+    return max(us) if us else None
+
+
 def setting_row(st: Setting) -> dict[str, Any]:
     row: dict[str, Any] = {
         "label": st.label,
@@ -156,5 +284,8 @@ def setting_row(st: Setting) -> dict[str, Any]:
         e = st.error(q)
         row[f"err_{q}_pct"] = e
     row["max_error_pct"] = st.error()
+    for q, _, _ in QUANTITIES:
+        row[f"err_lim_{q}_pct"] = st.limit_error(q)
+    row["max_error_vs_limit_pct"] = st.limit_error()
     row["failed"] = "; ".join(st.failed)
     return row

@@ -21,6 +21,7 @@ from ..post.fidelity import (
     condition_name,
     ladder_self_errors,
     level_label,
+    limit_uncertainty_pct,
 )
 from ..post.tables import write_rows_csv
 
@@ -40,6 +41,7 @@ def condition_rows(settings: list[Setting]) -> list[dict[str, Any]]:
             for q, _, _ in QUANTITIES:
                 row[q] = s.get(q)
                 row[f"err_{q}_pct"] = st.errors.get(cond, {}).get(q)
+                row[f"err_lim_{q}_pct"] = st.limit_errors.get(cond, {}).get(q)
             row["hbm_s"] = round(float(r.timings.get("hbm", 0.0)), 3)
             rows.append(row)
     return rows
@@ -74,6 +76,10 @@ def fidelity_outputs(
         "err_peak_frequency_hz_pct",
         "err_friction_energy_mj_pct",
         "max_error_pct",
+        "err_lim_peak_amplitude_mm_pct",
+        "err_lim_peak_frequency_hz_pct",
+        "err_lim_friction_energy_mj_pct",
+        "max_error_vs_limit_pct",
         "on_front",
         "failed",
     ]
@@ -118,6 +124,10 @@ def fidelity_outputs(
                         "level": level_label(knob, s.values[knob]),
                         "condition": c,
                         **{f"{q} error %": s.errors.get(c, {}).get(q) for q, _, _ in QUANTITIES},
+                        **{
+                            f"{q} error vs limit %": s.limit_errors.get(c, {}).get(q)
+                            for q, _, _ in QUANTITIES
+                        },
                         "worst error vs the knob's finest level %": own,
                         "time s": r["time_s"],
                         "failed": "; ".join(s.failed),
@@ -152,6 +162,7 @@ def fidelity_outputs(
                 ],
             }
         )
+    sections.append(_limits_section(summary, tables))
     tol = tolerance
     picked = (summary.get("picked") or {}).get("picked")
     cand = [s for s in settings if s.role != "reference"]
@@ -223,6 +234,7 @@ def fidelity_outputs(
         f"reference: {_kv(summary['reference'])}",
         f"Pareto front (worst error): {', '.join(summary['pareto_front'])}",
     ]
+    head.append(_reference_vs_limit(by_label.get(ref.label, {}), summary["limit"]))
     if summary.get("picked"):
         head.append(summary["picked"]["reason"])
     timings = {
@@ -233,6 +245,104 @@ def fidelity_outputs(
         },
     }
     return head, timings, sections
+
+
+def limit_rows(summary: dict[str, Any]) -> list[dict[str, Any]]:
+    """One row per knob (and "all knobs"), condition and quantity: the limit estimate."""
+    rows = []
+    for knob, lim in summary["knob_limits"].items():
+        for c, qs in lim.items():
+            for q, e in qs.items():
+                rows.append(
+                    {
+                        "knob": knob,
+                        "condition": c,
+                        "quantity": q,
+                        "finest level": e["finest"],
+                        "limit": e["value"],
+                        "uncertainty": e["uncertainty"],
+                        "observed order": e["order"],
+                        "asymptotic": e["asymptotic"],
+                        "method": e["method"],
+                        "why not asymptotic": e["reason"],
+                    }
+                )
+    for c, qs in summary["limit"].items():
+        for q, e in qs.items():
+            rows.append(
+                {
+                    "knob": "all knobs (reference + corrections)",
+                    "condition": c,
+                    "quantity": q,
+                    "finest level": None,
+                    "limit": e["value"],
+                    "uncertainty": e["uncertainty"],
+                    "observed order": None,
+                    "asymptotic": e["asymptotic"],
+                    "method": "sum of the knobs' corrections",
+                    "why not asymptotic": e["reason"],
+                }
+            )
+    return rows
+
+
+def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
+    write_csv(tables / "fidelity_limits.csv", limit_rows(summary))
+    flagged = sorted(
+        {
+            k
+            for k, lim in summary["knob_limits"].items()
+            for qs in lim.values()
+            for e in qs.values()
+            if not e["asymptotic"]
+        }
+    )
+    text = [
+        "Errors against the limit: each knob's converged value is estimated from its "
+        "finest three levels (the other knobs at the base) by Richardson extrapolation with "
+        "the observed order p (q = q0 + C h^p; h: mesh size in mm, 1/modes, 1/H, 1/nt, "
+        "1/points); its uncertainty is 1.25 |q_finest - q0| (Roache's grid convergence "
+        "index). The limit of every knob at once is the reference plus each knob's "
+        "correction q0 - q_finest (the knobs' errors assumed to add), its uncertainty the "
+        "sum of theirs. The 'vs limit' columns of the tables measure every setting, the "
+        "reference included, against it. Where a knob's finest levels are not asymptotic "
+        "(differences changing sign, p outside 0.5..8, fewer than three levels, differences "
+        "at round-off) nothing is extrapolated: that knob contributes no correction, the "
+        "flag 'asymptotic' is false and no uncertainty is given, so the error is then "
+        "against the finest level, as before. The tolerance pick still uses the errors "
+        "against the reference.",
+        "Knobs not asymptotic for some condition or quantity: "
+        + (", ".join(flagged) if flagged else "none")
+        + ".",
+    ]
+    return {
+        "id": "limits",
+        "title": "Errors against the extrapolated limit",
+        "text": text,
+        "figures": [],
+        "tables": [
+            {
+                "path": "tables/fidelity_limits.csv",
+                "caption": "limit estimates: per knob and all knobs, with order, "
+                "uncertainty (quantity units) and the asymptotic flag",
+            }
+        ],
+    }
+
+
+def _reference_vs_limit(row: dict[str, Any], limit: dict[str, Any]) -> str:
+    """One line: the reference's error against the limit per quantity, +- its uncertainty."""
+    parts = []
+    for q, name, _ in QUANTITIES:
+        e, u = row.get(f"err_lim_{q}_pct"), limit_uncertainty_pct(limit, q)
+        flag = all(c.get(q, {}).get("asymptotic") for c in limit.values())
+        if e is None:
+            parts.append(f"{name} n/a")
+        elif flag and u is not None:
+            parts.append(f"{name} {e:.3g} % (+- {u:.2g} %)")
+        else:
+            parts.append(f"{name} {e:.3g} % (not asymptotic: against the finest levels)")
+    return "reference vs the extrapolated limit (worst condition): " + "; ".join(parts)
 
 
 def damper_line(summary: dict[str, Any]) -> str:

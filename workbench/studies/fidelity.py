@@ -7,7 +7,13 @@ ONE knob moved at a time to each of its ``levels-<knob>``, and once at the
 *reference*: every varied knob at its finest level at once. For every
 setting and condition the peak amplitude (mm), resonance frequency (Hz)
 and friction energy per cycle at the peak (mJ) are compared with the
-reference's: relative error ``|q - q_ref| / |q_ref|`` in percent.
+reference's: relative error ``|q - q_ref| / |q_ref|`` in percent. Beside it,
+every setting's error against an extrapolated limit: per knob, Richardson
+extrapolation of its ladder's finest three levels with the observed order
+(``workbench.post.extrapolation``), the knobs' corrections added to the
+reference (``workbench.post.fidelity.combined_limits``), flagged where a
+knob's levels are not asymptotic. The tolerance pick uses the errors
+against the reference.
 
 The time of a setting is what a user running that setting alone would pay:
 geometry (gmsh), reduction (Craig-Bampton of rig and damper), assembly and
@@ -52,9 +58,12 @@ from ..post.fidelity import (
     KNOBS,
     STAGES,
     Setting,
+    combined_limits,
     condition_name,
+    ladder_limits,
     ladder_self_errors,
     level_label,
+    limit_errors,
     relative_errors,
     setting_row,
 )
@@ -260,6 +269,10 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     if spec.tolerance is not None:
         pick, combos, extra = _tolerance(spec.tolerance, settings, ladders, comp, ref)
         settings = settings + extra
+    limits = ladder_limits(ladders)
+    combined = combined_limits(ref, ladders, limits)
+    for st in settings:
+        st.limit_errors = limit_errors(st, combined)
     candidates = [s for s in settings if s.role != "reference"]
     front_idx = pareto_front([(s.time_s, s.error()) for s in candidates])
     front = [candidates[i] for i in front_idx]
@@ -289,6 +302,11 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
                 ladders.items(), ladder_self_errors(ladders).values(), strict=True
             )
         },
+        "knob_limits": {
+            k: {c: {q: e.as_dict() for q, e in qs.items()} for c, qs in lim.items()}
+            for k, lim in limits.items()
+        },
+        "limit": combined,
         "base": {k: level_label(k, v) for k, v in settings[0].values.items()},
         "reference": {k: level_label(k, v) for k, v in ref.values.items()},
         "n_settings": len(settings),

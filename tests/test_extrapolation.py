@@ -1,0 +1,113 @@
+"""Richardson extrapolation with the observed order: known limits, flags, the Jenkins AFT ladder."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from workbench.post.extrapolation import observed_order, richardson
+
+
+@pytest.mark.parametrize("p", [1.0, 2.0, 3.5])
+@pytest.mark.parametrize("h", [[1.0, 2.0, 4.0], [3.0, 5.0, 9.0, 14.0]])  # uniform, non-uniform
+def test_power_law_recovers_limit_and_order(p, h):
+    q0, c = 2.5, 0.7
+    q = [q0 + c * x**p for x in h]
+    est = richardson(h, q)
+    assert est.asymptotic and est.method == "richardson" and est.reason == ""
+    assert math.isclose(est.order, p, rel_tol=1e-8)
+    assert math.isclose(est.value, q0, rel_tol=1e-10)
+    assert est.finest == q[0] and est.n_levels == 3
+
+
+def test_higher_order_term_limit_inside_the_uncertainty():
+    # q = q0 + C h^2 + D h^3, non-uniform levels, given coarsest first
+    q0 = 10.0
+    h = [0.4, 0.25, 0.15, 0.1]
+    q = [q0 + 0.5 * x**2 - 0.2 * x**3 for x in h]
+    est = richardson(h, q)
+    assert est.asymptotic
+    assert 1.5 < est.order < 2.5
+    assert abs(est.value - q0) <= est.uncertainty
+    assert abs(est.value - q0) < abs(q[-1] - q0)  # closer than the finest level
+    assert est.error_pct(q0) < est.uncertainty_pct()
+
+
+def test_observed_order_non_uniform_ratios():
+    h = [1.0, 1.3, 2.9]
+    assert math.isclose(observed_order(h, [1 + x**1.7 for x in h]), 1.7, rel_tol=1e-9)
+    assert observed_order(h, [1.0, 2.0, 1.5]) is None  # sign change
+
+
+def test_oscillating_data_are_flagged_and_not_extrapolated():
+    est = richardson([1.0, 2.0, 4.0, 8.0], [1.0, 1.02, 0.99, 1.05])
+    assert not est.asymptotic and est.method == "finest level"
+    assert est.value == 1.0 and est.uncertainty is None and "oscillating" in est.reason
+
+
+def test_implausible_order_is_flagged():
+    # differences 1e-3 then 1e-6 at ratio 2: p ~ 10, beyond 0.5..8
+    est = richardson([1.0, 2.0, 4.0], [1.0, 1.000001, 1.001001])
+    assert not est.asymptotic and est.value == 1.0 and est.order > 8
+    assert "outside the plausible" in est.reason
+    # a coarser difference smaller than the finer one: diverging, no power law
+    est = richardson([1.0, 2.0, 4.0], [1.0, 1.001, 1.001001])
+    assert not est.asymptotic and est.order is None and "no power law" in est.reason
+    # nearly equal differences: p ~ 0.01, pre-asymptotic
+    est = richardson([1.0, 2.0, 4.0], [1.0, 1.1, 1.2007])
+    assert not est.asymptotic and est.order < 0.5
+
+
+def test_round_off_and_too_few_levels():
+    est = richardson([1.0, 2.0, 4.0], [3.0, 3.0 + 1e-13, 3.0 - 1e-13])
+    assert not est.asymptotic and "round-off" in est.reason and est.value == 3.0
+    assert est.uncertainty == pytest.approx(2e-13, rel=1e-3)
+    est = richardson([1.0, 2.0, 4.0], [3.0, None, float("nan")])
+    assert not est.asymptotic and est.value == 3.0 and "three are needed" in est.reason
+    est = richardson([], [])
+    assert est.value is None and est.error_pct(1.0) is None
+    with pytest.raises(ValueError):
+        richardson([1.0, 1.0, 2.0], [1.0, 2.0, 3.0])
+
+
+# ---- physics: the Jenkins oscillator's peak against the AFT samples --------------------------
+
+
+def _jenkins_peak(nt: int) -> float:
+    """Peak amplitude of the unit Jenkins oscillator (dimensionless), level 0.9, harmonics 0-7."""
+    from workbench.hbm import SolverOptions, frequency_response
+    from workbench.hbm.examples import unit_jenkins
+
+    ex = unit_jenkins()
+    b = frequency_response(
+        ex.system,
+        ex.f1,
+        0.9,
+        ex.band_hz,
+        [0],
+        harmonics=tuple(range(8)),
+        nt=nt,
+        options=SolverOptions(stability=False, ds_max=0.02, peak_ftol=1e-10, peak_iterations=80),
+    )
+    assert not b.failed
+    return float(b.summary()["peak_amplitude"])
+
+
+def test_jenkins_peak_against_aft_samples_extrapolates_to_nt_1024():
+    """The stick-slip kinks make the AFT's sampled friction force converge like a trapezoidal
+    rule over a piecewise-smooth signal: order 2, lowered towards 1 while a transition
+    instant is located only within one sample, so the observed order must lie in 1..3."""
+    nts = [32, 64, 128, 256]
+    q = [_jenkins_peak(nt) for nt in nts]
+    fine = _jenkins_peak(1024)
+    est = richardson([1.0 / n for n in nts], q)
+    assert est.asymptotic, est.reason
+    assert 1.0 <= est.order <= 3.0, est.order
+    assert abs(est.value - fine) <= est.uncertainty, (est, fine)
+    assert abs(est.value - fine) < abs(q[-1] - fine)  # the limit beats the finest level
+    # the coarsest three (32, 64, 128 with harmonics up to 7) are pre-asymptotic: flagged
+    coarse = richardson([1.0 / n for n in nts[:3]], q[:3])
+    assert not coarse.asymptotic and coarse.method == "finest level"
+    assert np.isfinite(est.uncertainty_pct())
