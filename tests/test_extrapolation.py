@@ -111,3 +111,48 @@ def test_jenkins_peak_against_aft_samples_extrapolates_to_nt_1024():
     coarse = richardson([1.0 / n for n in nts[:3]], q[:3])
     assert not coarse.asymptotic and coarse.method == "finest level"
     assert np.isfinite(est.uncertainty_pct())
+
+
+def test_levels_of_one_fineness_are_one_step_of_the_ladder():
+    """'H 1' and 'H 0-1' share the highest harmonic (the fineness 1/H): the finer level is
+    kept and the ladder still extrapolates (it raised "fineness must be distinct")."""
+    from types import SimpleNamespace as NS
+
+    from workbench.post.fidelity import QUANTITIES, ladder_limits
+
+    def setting(hs, q):
+        summ = {name: q for name, _, _ in QUANTITIES}
+        res = NS(branch=NS(failed=False), summary=lambda: summ)
+        return NS(values={"harmonics": hs}, results={"c": res})
+
+    q = {1: 1.5, 3: 1.0 + 3.0**-2, 5: 1.0 + 5.0**-2, 7: 1.0 + 7.0**-2}  # q0 = 1, p = 2 in 1/H
+    lad = [setting([1], 9.0), setting([0, 1], q[1])]
+    lad += [setting(list(range(h + 1)), q[h]) for h in (3, 5, 7)]
+    est = ladder_limits({"harmonics": lad})["harmonics"]["c"][QUANTITIES[0][0]]
+    assert est.asymptotic and est.method == "richardson"
+    assert est.order == pytest.approx(2.0, rel=1e-6)
+    assert est.value == pytest.approx(1.0, rel=1e-9)
+
+
+def test_a_modelling_choice_neither_corrects_nor_flags_the_limit():
+    """The rigid or flexible damper is no ladder towards a limit: the all-knob limit is
+    that of the discretisation knobs (here nt, q0 = 1 at order 2 in 1/nt)."""
+    from types import SimpleNamespace as NS
+
+    from workbench.post.fidelity import QUANTITIES, combined_limits, ladder_limits
+
+    def setting(nt, rigid, q):
+        summ = {name: q for name, _, _ in QUANTITIES}
+        res = NS(branch=NS(failed=False), summary=lambda: summ)
+        return NS(values={"nt": nt, "rigid-damper": rigid}, results={"c": res})
+
+    qn = {n: 1.0 + 100.0 / n**2 for n in (16, 32, 64, 128)}
+    ladders = {
+        "nt": [setting(n, False, qn[n]) for n in (16, 32, 64, 128)],
+        "rigid-damper": [setting(128, True, 5.0), setting(128, False, qn[128])],
+    }
+    ref = setting(128, False, qn[128])
+    lim = combined_limits(ref, ladders, ladder_limits(ladders))["c"][QUANTITIES[0][0]]
+    assert lim["asymptotic"], lim["reason"]
+    assert lim["value"] == pytest.approx(1.0, rel=1e-9)
+    assert "rigid-damper" not in lim["reason"]

@@ -183,6 +183,12 @@ def ladder_limits(ladders: dict[str, list[Setting]]) -> dict[str, dict[str, dict
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for knob, lad in ladders.items():
         hs = [knob_h(knob, st.values[knob]) for st in lad]
+        if all(h is not None for h in hs):
+            # levels of one fineness ("H 1" and "H 0-1": the same highest harmonic) are
+            # no ladder step: the finer one (later in the coarse-to-fine ladder) is kept
+            last = {h: i for i, h in enumerate(hs)}
+            keep = sorted(last.values())
+            lad, hs = [lad[i] for i in keep], [hs[i] for i in keep]
         out[knob] = {}
         for cond in lad[-1].results:
             out[knob][cond] = {}
@@ -210,7 +216,10 @@ def combined_limits(
     of the knobs' (conservative). ``asymptotic`` is True only if every knob's
     is; a knob that falls back adds no correction and no known uncertainty,
     so the uncertainty is then None. A knob whose finest level is not the
-    reference's value (the base is finer) cannot be used: flagged too.
+    reference's value (the base is finer) cannot be used: flagged too. A knob
+    that is no discretisation (the rigid or flexible damper: a modelling
+    choice, no fineness) has no limit: the reference's choice stands and it
+    neither corrects nor flags the limit.
     """
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for cond in ref.results:
@@ -221,6 +230,8 @@ def combined_limits(
             asym, why = v is not None, [] if v is not None else ["no reference value"]
             orders: dict[str, float | None] = {}
             for knob, lad in ladders.items():
+                if any(knob_h(knob, st.values[knob]) is None for st in lad):
+                    continue  # a modelling choice, not a ladder towards a limit
                 est = limits[knob].get(cond, {}).get(q)
                 orders[knob] = est.order if est is not None else None
                 if lad[-1].values[knob] != ref.values[knob]:

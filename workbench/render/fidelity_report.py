@@ -288,13 +288,19 @@ def limit_rows(summary: dict[str, Any]) -> list[dict[str, Any]]:
 
 def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
     write_csv(tables / "fidelity_limits.csv", limit_rows(summary))
+    no_ladder = "no fineness to extrapolate"  # a modelling choice (rigid damper), no limit
+    choices = sorted(
+        k
+        for k, lim in summary["knob_limits"].items()
+        if all(e["reason"] == no_ladder for qs in lim.values() for e in qs.values())
+    )
     flagged = sorted(
         {
             k
             for k, lim in summary["knob_limits"].items()
             for qs in lim.values()
             for e in qs.values()
-            if not e["asymptotic"]
+            if not e["asymptotic"] and k not in choices
         }
     )
     text = [
@@ -313,7 +319,13 @@ def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
         "against the reference.",
         "Knobs not asymptotic for some condition or quantity: "
         + (", ".join(flagged) if flagged else "none")
-        + ".",
+        + "."
+        + (
+            " Modelling choices, not ladders towards a limit (the reference's choice "
+            f"stands): {', '.join(choices)}."
+            if choices
+            else ""
+        ),
     ]
     return {
         "id": "limits",
