@@ -156,3 +156,24 @@ def test_a_modelling_choice_neither_corrects_nor_flags_the_limit():
     assert lim["asymptotic"], lim["reason"]
     assert lim["value"] == pytest.approx(1.0, rel=1e-9)
     assert "rigid-damper" not in lim["reason"]
+
+
+def test_the_pick_judges_by_the_limit_only_where_it_is_trusted():
+    """Quantity a: its limit is trusted, the error against it counts (2 %, although 0.5 %
+    against the reference); quantity b: not trusted, the error against the reference."""
+    from types import SimpleNamespace as NS
+
+    from workbench.post.fidelity import QUANTITIES, pick_basis, pick_error
+
+    qa, qb, qc = (q for q, _, _ in QUANTITIES)
+    st = NS(
+        results={"c": None},
+        errors={"c": {qa: 0.5, qb: 1.0, qc: 0.1}},
+        limit_errors={"c": {qa: 2.0, qb: 9.0, qc: 0.2}},
+    )
+    combined = {"c": {qa: {"asymptotic": True}, qb: {"asymptotic": False}, qc: {}}}
+    assert pick_error(st, combined) == 2.0
+    assert qa in pick_basis(combined) and qb not in pick_basis(combined)
+    none = {"c": {q: {"asymptotic": False} for q in (qa, qb, qc)}}
+    assert pick_error(st, none) == 1.0  # all against the reference
+    assert pick_basis(none).startswith("errors against the reference")

@@ -345,6 +345,10 @@ def test_tiny_errors_against_the_limit(tiny):
     for q in qs:  # the reference itself is measured against the limit
         assert ref[f"err_lim_{q}_pct"] is not None and ref[f"err_lim_{q}_pct"] >= 0
     assert rows["nt 16"]["max_error_vs_limit_pct"] > 0
+    # the pick says what it measured against: the limit where trusted, else the reference
+    trusted = any(e["asymptotic"] for byq in s["limit"].values() for e in byq.values())
+    assert s["picked"]["basis"] in s["picked"]["reason"]
+    assert ("extrapolated limit" in s["picked"]["basis"]) == trusted
     assert (d / "out" / "tables" / "fidelity_limits.csv").is_file()
     man = json.loads((d / "out" / "manifest.json").read_text())
     assert "limits" in [x["id"] for x in man["sections"]]

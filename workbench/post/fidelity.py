@@ -269,6 +269,35 @@ def limit_errors(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) ->
     return out
 
 
+def pick_error(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) -> float | None:
+    """The worst error (percent) the tolerance pick judges ``st`` by: against the
+    all-knob limit where that limit is trusted (``asymptotic``), against the reference
+    elsewhere (the limit of that condition and quantity is not known). None if any error
+    is missing."""
+    errs = {
+        cond: {
+            q: (st.limit_errors if combined.get(cond, {}).get(q, {}).get("asymptotic")
+                else st.errors).get(cond, {}).get(q)
+            for q, _, _ in QUANTITIES
+        }
+        for cond in st.results
+    }  # fmt: skip
+    return worst(errs)
+
+
+def pick_basis(combined: dict[str, dict[str, dict[str, Any]]]) -> str:
+    """In words, what :func:`pick_error` measures against."""
+    trusted = sorted({f"{q} at {c}" for c, qs in combined.items() for q, e in qs.items()
+                      if e.get("asymptotic")})  # fmt: skip
+    if not trusted:
+        return "errors against the reference (no extrapolated limit is trusted)"
+    return (
+        "errors against the extrapolated limit for "
+        + ", ".join(trusted)
+        + ("; against the reference elsewhere")
+    )
+
+
 def limit_uncertainty_pct(combined: dict[str, dict[str, dict[str, Any]]], q: str) -> float | None:
     """The largest uncertainty of the limit of ``q`` over the conditions, percent of |limit|."""
     us = []

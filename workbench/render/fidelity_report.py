@@ -315,8 +315,9 @@ def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
         "(differences changing sign, p outside 0.5..8, fewer than three levels, differences "
         "at round-off) nothing is extrapolated: that knob contributes no correction, the "
         "flag 'asymptotic' is false and no uncertainty is given, so the error is then "
-        "against the finest level, as before. The tolerance pick still uses the errors "
-        "against the reference.",
+        "against the finest level, as before. The tolerance pick uses the errors against "
+        "the limit where it is trusted and against the reference elsewhere (its reason "
+        "says which).",
         "Knobs not asymptotic for some condition or quantity: "
         + (", ".join(flagged) if flagged else "none")
         + "."

@@ -12,8 +12,9 @@ every setting's error against an extrapolated limit: per knob, Richardson
 extrapolation of its ladder's finest three levels with the observed order
 (``workbench.post.extrapolation``), the knobs' corrections added to the
 reference (``workbench.post.fidelity.combined_limits``), flagged where a
-knob's levels are not asymptotic. The tolerance pick uses the errors
-against the reference.
+knob's levels are not asymptotic. The tolerance pick judges a setting by
+its errors against that limit where it is trusted and against the
+reference elsewhere (``workbench.post.fidelity.pick_error``).
 
 The time of a setting is what a user running that setting alone would pay:
 geometry (gmsh), reduction (Craig-Bampton of rig and damper), assembly and
@@ -64,6 +65,8 @@ from ..post.fidelity import (
     ladder_self_errors,
     level_label,
     limit_errors,
+    pick_basis,
+    pick_error,
     relative_errors,
     setting_row,
 )
@@ -264,15 +267,15 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
 
         settings.append(fidelity_entry(comp, settings[0], ref, out))
 
-    pick = None
-    combos: list[dict[str, Any]] = []
-    if spec.tolerance is not None:
-        pick, combos, extra = _tolerance(spec.tolerance, settings, ladders, comp, ref)
-        settings = settings + extra
     limits = ladder_limits(ladders)
     combined = combined_limits(ref, ladders, limits)
     for st in settings:
         st.limit_errors = limit_errors(st, combined)
+    pick = None
+    combos: list[dict[str, Any]] = []
+    if spec.tolerance is not None:
+        pick, combos, extra = _tolerance(spec.tolerance, settings, ladders, comp, ref, combined)
+        settings = settings + extra
     candidates = [s for s in settings if s.role != "reference"]
     front_idx = pareto_front([(s.time_s, s.error()) for s in candidates])
     front = [candidates[i] for i in front_idx]
@@ -337,8 +340,13 @@ def _tolerance(
     ladders: dict[str, list[Setting]],
     comp: _Computer,
     ref: Setting,
+    combined: dict[str, dict[str, dict[str, Any]]],
 ) -> tuple[dict, list[dict], list[Setting]]:
-    """The tolerance pick: verified combinations first, then every measured setting."""
+    """The tolerance pick: verified combinations first, then every measured setting.
+
+    Each setting is judged by :func:`pick_error`: against the extrapolated limit where
+    it is trusted, against the reference elsewhere (``combined``: the all-knob limit).
+    """
     known = {s.key: s for s in settings}
     extra: list[Setting] = []
     combos: list[dict[str, Any]] = []
@@ -384,6 +392,7 @@ def _tolerance(
             n_before = comp.n_computed
             comp.run([st], f"combination {shift + 1}")
             st.errors = relative_errors(st, ref)
+            st.limit_errors = limit_errors(st, combined)
             known[key] = st
             extra.append(st)
             note = (
@@ -391,7 +400,7 @@ def _tolerance(
                 if comp.n_computed > n_before
                 else "verified by computing it (its cases were found in the cache)"
             )
-        err = st.error()
+        err = pick_error(st, combined)
         ok = err is not None and err <= tol
         combos.append(
             {
@@ -414,9 +423,14 @@ def _tolerance(
         )
         if ok or all(st.values[k] == lad[-1].values[k] for k, lad in ladders.items()):
             break
-    rows = [setting_row(s) for s in list(settings) + extra if s.role != "reference"]
+    rows = []
+    for s in list(settings) + extra:
+        if s.role != "reference":
+            rows.append(dict(setting_row(s), max_error_pct=pick_error(s, combined)))
     pick = pick_cheapest(rows, tol)
     pick["tolerance_pct"] = tol
+    pick["basis"] = pick_basis(combined)
+    pick["reason"] += f" ({pick['basis']})"
     if pick["picked"] is not None and pick["picked"]["role"] == "combined":
         pick["reason"] += " (a combination of per-knob levels, verified by computing it)"
     tried = [c for c in combos if c.get("label") not in (None, "reference")]
