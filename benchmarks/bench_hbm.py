@@ -66,7 +66,7 @@ ROOT = Path(__file__).resolve().parents[1]
 import pyharm_compare  # noqa: E402
 
 CASES = ("sdof", "sdof200", "two_dof", "pairs46", "pairs146", "rig_wedge", "pyharm")
-RIG_MODELS = Path(__file__).resolve().parents[1] / "results" / "bench_models"
+RIG_MODELS = ROOT / "results" / "bench_models"
 # issue 28's targets (s, with stability, on the 2-core reference machine); the stability must
 # also be under a quarter of each curve's time (STABILITY_SHARE)
 TARGETS_S = {"sdof": 1.0, "sdof200": 1.0, "pairs46": 3.0, "pairs146": 30.0}
@@ -135,7 +135,7 @@ def run_case(name: str, profile: bool) -> dict:
     from workbench.hbm import frequency_response
 
     system, f1, level, band, outputs, harm, opts = (
-        _rig_wedge() if name == "rig_wedge" else (make_case(name))
+        _rig_wedge() if name == "rig_wedge" else make_case(name)
     )
     load0 = loadavg()
     prof = cProfile.Profile() if profile else None

@@ -113,17 +113,23 @@ def test_jenkins_peak_against_aft_samples_extrapolates_to_nt_1024():
     assert np.isfinite(est.uncertainty_pct())
 
 
+def _fake_setting(values: dict, q: float):
+    """A fidelity setting stand-in: knob ``values``, every quantity ``q`` at condition c."""
+    from types import SimpleNamespace as NS
+
+    from workbench.post.fidelity import QUANTITIES
+
+    summ = {name: q for name, _, _ in QUANTITIES}
+    return NS(values=values, results={"c": NS(branch=NS(failed=False), summary=lambda: summ)})
+
+
 def test_levels_of_one_fineness_are_one_step_of_the_ladder():
     """'H 1' and 'H 0-1' share the highest harmonic (the fineness 1/H): the finer level is
     kept and the ladder still extrapolates (it raised "fineness must be distinct")."""
-    from types import SimpleNamespace as NS
-
     from workbench.post.fidelity import QUANTITIES, ladder_limits
 
     def setting(hs, q):
-        summ = {name: q for name, _, _ in QUANTITIES}
-        res = NS(branch=NS(failed=False), summary=lambda: summ)
-        return NS(values={"harmonics": hs}, results={"c": res})
+        return _fake_setting({"harmonics": hs}, q)
 
     q = {1: 1.5, 3: 1.0 + 3.0**-2, 5: 1.0 + 5.0**-2, 7: 1.0 + 7.0**-2}  # q0 = 1, p = 2 in 1/H
     lad = [setting([1], 9.0), setting([0, 1], q[1])]
@@ -137,14 +143,10 @@ def test_levels_of_one_fineness_are_one_step_of_the_ladder():
 def test_a_modelling_choice_neither_corrects_nor_flags_the_limit():
     """The rigid or flexible damper is no ladder towards a limit: the all-knob limit is
     that of the discretisation knobs (here nt, q0 = 1 at order 2 in 1/nt)."""
-    from types import SimpleNamespace as NS
-
     from workbench.post.fidelity import QUANTITIES, combined_limits, ladder_limits
 
     def setting(nt, rigid, q):
-        summ = {name: q for name, _, _ in QUANTITIES}
-        res = NS(branch=NS(failed=False), summary=lambda: summ)
-        return NS(values={"nt": nt, "rigid-damper": rigid}, results={"c": res})
+        return _fake_setting({"nt": nt, "rigid-damper": rigid}, q)
 
     qn = {n: 1.0 + 100.0 / n**2 for n in (16, 32, 64, 128)}
     ladders = {

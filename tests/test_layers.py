@@ -16,20 +16,24 @@ import pytest
 PKG = Path(__file__).resolve().parents[1] / "workbench"
 
 
+def from_module(node: ast.ImportFrom, module: str) -> str:
+    """The absolute name of the module a ``from ... import`` in ``module`` reads."""
+    if not node.level:
+        return node.module or ""
+    package = module.split(".")[:-1]
+    base = package[: len(package) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
 def imported_modules(source: str, module: str) -> list[tuple[int, str]]:
     """(line, absolute module name) of every import in ``source``, the source of the
     module named ``module`` (e.g. "workbench.render.sections"); relative imports resolved."""
-    package = module.split(".")[:-1]
     out = []
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Import):
             out.extend((node.lineno, a.name) for a in node.names)
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package[: len(package) - (node.level - 1)]
-                mod = ".".join(base + ([node.module] if node.module else []))
-            else:
-                mod = node.module or ""
+            mod = from_module(node, module)
             out.append((node.lineno, mod))
             # "from .. import studies" names the sub-package itself
             out.extend((node.lineno, f"{mod}.{a.name}") for a in node.names)
@@ -101,6 +105,15 @@ def test_nonlinear_mode_sources_do_not_key_the_forced_responses():
 
 
 # ---- no import cycle in the package (issue 30) ----------------------------------------------
+def _modules(pkg: Path) -> dict[str, Path]:
+    """Module name -> source file of every module of ``pkg`` (a package: its __init__)."""
+    out = {}
+    for p in sorted(pkg.rglob("*.py")):
+        parts = p.relative_to(pkg.parent).with_suffix("").parts
+        out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = p
+    return out
+
+
 def import_graph(pkg: Path) -> dict[str, set[str]]:
     """module -> the package's modules it imports (imports inside functions included).
 
@@ -109,10 +122,7 @@ def import_graph(pkg: Path) -> dict[str, set[str]]:
     imports of its own parent packages do not count (Python imports them first
     anyway, and they hold no code of the module's concept).
     """
-    mods: dict[str, Path] = {}
-    for p in sorted(pkg.rglob("*.py")):
-        parts = p.relative_to(pkg.parent).with_suffix("").parts
-        mods[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = p
+    mods = _modules(pkg)
 
     def resolve(m: str) -> str:
         while m and m not in mods:
@@ -225,14 +235,6 @@ def _top_level(path: Path) -> tuple[set[str], set[str]]:
     return defined, imported
 
 
-def _modules(pkg: Path) -> dict[str, Path]:
-    out = {}
-    for p in sorted(pkg.rglob("*.py")):
-        parts = p.relative_to(pkg.parent).with_suffix("").parts
-        out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = p
-    return out
-
-
 def reexports(pkg: Path, users: list[Path]) -> list[str]:
     """Imports of a name from a module (not a package) that only imports it, and names a
     module's ``__all__`` lists without defining them: a re-export shim either way."""
@@ -257,15 +259,11 @@ def reexports(pkg: Path, users: list[Path]) -> list[str]:
                         and e.value in imported
                     ]
     for f in users:
-        parts = f.relative_to(pkg.parent).with_suffix("").parts
+        me = ".".join(f.relative_to(pkg.parent).with_suffix("").parts)
         for node in ast.walk(ast.parse(f.read_text())):
             if not isinstance(node, ast.ImportFrom):
                 continue
-            if node.level:
-                base = list(parts[:-1])[: len(parts) - 1 - (node.level - 1)]
-                mod = ".".join(base + ([node.module] if node.module else []))
-            else:
-                mod = node.module or ""
+            mod = from_module(node, me)
             if mod not in tops:
                 continue
             defined, imported = tops[mod]

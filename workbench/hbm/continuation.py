@@ -505,9 +505,9 @@ def _band_end(corr: Corrector, x: np.ndarray, w: float, xn: np.ndarray, wn: floa
     step (xn, wn) that passed it: from the interpolated guess (with the current LU, then a
     fresh one), then from the step's own solution, then by frequency steps from the last
     point (halved while they fail). Returns the last corrector result tried."""
-    theta = (w1 - w) / (wn - w)
-    end = corr.solve_natural(x + theta * (xn - x), w1)
-    for guess in (x + theta * (xn - x), xn):
+    interpolated = x + (w1 - w) / (wn - w) * (xn - x)
+    end = corr.solve_natural(interpolated, w1)
+    for guess in (interpolated, xn):
         if end.converged:
             return end
         corr.force_refresh = True

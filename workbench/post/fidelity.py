@@ -148,6 +148,9 @@ def ladder_self_errors(ladders: dict[str, list[Setting]]) -> dict[str, list[floa
     }
 
 
+NO_LADDER = "no fineness to extrapolate"  # the reason given for a modelling choice (rigid damper)
+
+
 def knob_h(knob: str, v: Any) -> float | None:
     """The fineness h of one knob level (smaller is finer) for Richardson extrapolation.
 
@@ -162,6 +165,11 @@ def knob_h(knob: str, v: Any) -> float | None:
     if knob in ("modes", "nt", "points-per-line"):
         return 1.0 / int(v) if v else None
     return None
+
+
+def is_ladder(knob: str, lad: list[Setting]) -> bool:
+    """Whether a knob's levels have a fineness (a ladder towards a limit), not a choice."""
+    return all(knob_h(knob, st.values[knob]) is not None for st in lad)
 
 
 def _value(st: Setting, cond: str, q: str) -> float | None:
@@ -182,8 +190,9 @@ def ladder_limits(ladders: dict[str, list[Setting]]) -> dict[str, dict[str, dict
     """
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for knob, lad in ladders.items():
+        ladder = is_ladder(knob, lad)
         hs = [knob_h(knob, st.values[knob]) for st in lad]
-        if all(h is not None for h in hs):
+        if ladder:
             # levels of one fineness ("H 1" and "H 0-1": the same highest harmonic) are
             # no ladder step: the finer one (later in the coarse-to-fine ladder) is kept
             last = {h: i for i, h in enumerate(hs)}
@@ -194,13 +203,11 @@ def ladder_limits(ladders: dict[str, list[Setting]]) -> dict[str, dict[str, dict
             out[knob][cond] = {}
             for q, _, _ in QUANTITIES:
                 vals = [_value(st, cond, q) for st in lad]
-                if any(h is None for h in hs):
-                    v = vals[-1]
-                    est = LimitEstimate(
-                        v, None, None, False, "finest level", "no fineness to extrapolate", v, 1
-                    )
-                else:
+                if ladder:
                     est = richardson(hs, vals)
+                else:
+                    v = vals[-1]
+                    est = LimitEstimate(v, None, None, False, "finest level", NO_LADDER, v, 1)
                 out[knob][cond][q] = est
     return out
 
@@ -230,7 +237,7 @@ def combined_limits(
             asym, why = v is not None, [] if v is not None else ["no reference value"]
             orders: dict[str, float | None] = {}
             for knob, lad in ladders.items():
-                if any(knob_h(knob, st.values[knob]) is None for st in lad):
+                if not is_ladder(knob, lad):
                     continue  # a modelling choice, not a ladder towards a limit
                 est = limits[knob].get(cond, {}).get(q)
                 orders[knob] = est.order if est is not None else None
@@ -291,11 +298,8 @@ def pick_basis(combined: dict[str, dict[str, dict[str, Any]]]) -> str:
                       if e.get("asymptotic")})  # fmt: skip
     if not trusted:
         return "errors against the reference (no extrapolated limit is trusted)"
-    return (
-        "errors against the extrapolated limit for "
-        + ", ".join(trusted)
-        + ("; against the reference elsewhere")
-    )
+    listed = ", ".join(trusted)
+    return f"errors against the extrapolated limit for {listed}; against the reference elsewhere"
 
 
 def limit_uncertainty_pct(combined: dict[str, dict[str, dict[str, Any]]], q: str) -> float | None:

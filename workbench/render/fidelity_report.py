@@ -15,6 +15,7 @@ from typing import Any
 from ..io import write_json
 from ..post.fidelity import (
     KNOBS,
+    NO_LADDER,
     QUANTITIES,
     STAGES,
     Setting,
@@ -288,11 +289,10 @@ def limit_rows(summary: dict[str, Any]) -> list[dict[str, Any]]:
 
 def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
     write_csv(tables / "fidelity_limits.csv", limit_rows(summary))
-    no_ladder = "no fineness to extrapolate"  # a modelling choice (rigid damper), no limit
-    choices = sorted(
+    choices = sorted(  # modelling choices (the rigid damper): no limit to estimate
         k
         for k, lim in summary["knob_limits"].items()
-        if all(e["reason"] == no_ladder for qs in lim.values() for e in qs.values())
+        if all(e["reason"] == NO_LADDER for qs in lim.values() for e in qs.values())
     )
     flagged = sorted(
         {
