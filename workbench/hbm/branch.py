@@ -24,14 +24,13 @@ unknowns (m; the layout of :mod:`.balance`), from which
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from ..io import atomic_path
+from .io.record import Layout, PathRecord
 
 _ARRAYS = (
     "freq_hz",
@@ -54,10 +53,28 @@ _ARRAYS = (
     "max_floquet_real",
     "accuracy",
 )
+LAYOUT = Layout(
+    datasets=_ARRAYS,
+    attrs=(
+        ("level", "float"),
+        ("band_hz", "floats"),
+        ("harmonics", "ints"),
+        ("nt", "int"),
+        ("output_names", "names"),
+        ("space", "str"),
+        ("completed", "bool"),
+        ("failed", "bool"),
+        ("message", "str"),
+        ("label", "str"),
+        ("timings", "json"),
+        ("stats", "json"),
+        ("options", "json"),
+    ),
+)
 
 
 @dataclass
-class Branch:
+class Branch(PathRecord):
     """A computed frequency response curve (see the module docstring for the arrays)."""
 
     level: float
@@ -92,6 +109,8 @@ class Branch:
     stats: dict[str, Any] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)
     label: str = ""
+
+    LAYOUT: ClassVar[Layout] = LAYOUT
 
     def __post_init__(self) -> None:
         self.stable = np.asarray(self.stable, dtype=bool)
@@ -198,53 +217,10 @@ class Branch:
             message=self.message,
         )
 
-    def save(self, path: str | Path) -> Path:
-        """Write to HDF5 atomically."""
-        import h5py
-
-        path = Path(path)
-        with atomic_path(path) as tmp, h5py.File(tmp, "w") as h:
-            for name in _ARRAYS:
-                h.create_dataset(name, data=getattr(self, name))
-            a = h.attrs
-            a["level"] = self.level
-            a["band_hz"] = np.asarray(self.band_hz, dtype=float)
-            a["harmonics"] = np.asarray(self.harmonics, dtype=int)
-            a["nt"] = self.nt
-            a["output_names"] = json.dumps(list(self.output_names))
-            a["space"] = self.space
-            a["completed"] = self.completed
-            a["failed"] = self.failed
-            a["message"] = self.message
-            a["label"] = self.label
-            for k in ("timings", "stats", "options"):
-                a[k] = json.dumps(getattr(self, k), default=float)
-        return path
-
     @classmethod
-    def load(cls, path: str | Path) -> Branch:
-        import h5py
-
-        with h5py.File(path, "r") as h:
-            a = h.attrs
-            kw: dict[str, Any] = {name: h[name][()] for name in _ARRAYS if name in h}
-            kw["stable"] = kw["stable"].astype(bool)
-            return cls(
-                level=float(a["level"]),
-                band_hz=tuple(float(v) for v in a["band_hz"]),
-                harmonics=tuple(int(v) for v in a["harmonics"]),
-                nt=int(a["nt"]),
-                output_names=tuple(json.loads(a["output_names"])),
-                space=str(a["space"]),
-                completed=bool(a["completed"]),
-                failed=bool(a["failed"]),
-                message=str(a["message"]),
-                label=str(a["label"]),
-                timings=json.loads(a["timings"]),
-                stats=json.loads(a["stats"]),
-                options=json.loads(a["options"]),
-                **kw,
-            )
+    def from_file(cls, kw: dict[str, Any]) -> dict[str, Any]:
+        kw["stable"] = kw["stable"].astype(bool)
+        return kw
 
     def to_csv(self, path: str | Path, unit_scale: float = 1.0, unit: str = "m") -> Path:
         """One row per point: frequency, stability, per-output amplitudes, energies."""

@@ -7,14 +7,14 @@ studies and the figures; saved to HDF5 and CSV.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from .fourier import Fourier
+from .io.record import Layout, PathRecord
 
 POINT_ARRAYS = (
     "amplitude",
@@ -36,8 +36,27 @@ POINT_ARRAYS = (
 )
 
 
+LAYOUT = Layout(
+    datasets=(*POINT_ARRAYS, "linear_hz", "lin_phi", "lin_c", "obs"),
+    required=(*POINT_ARRAYS, "linear_hz"),
+    attrs=(
+        ("mode", "int"),
+        ("f_stuck_hz", "float"),
+        ("nt", "int"),
+        ("n", "int"),
+        ("completed", "bool"),
+        ("failed", "bool"),
+        ("message", "str"),
+        ("label", "str"),
+        ("harmonics", "ints"),
+        ("output_names", "names"),
+        ("timings", "json"),
+    ),
+)
+
+
 @dataclass
-class NlModeBranch:
+class NlModeBranch(PathRecord):
     """A backbone: one nonlinear mode against its modal amplitude (arrays per point).
 
     ``amplitude`` (sqrt(kg) m: the harmonic-1 motion is ``a psi_1`` with
@@ -87,6 +106,8 @@ class NlModeBranch:
     lin_phi: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (n, n_m)
     lin_c: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (n_m,) 2 zeta w, 1/s
     obs: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (n_out, n)
+
+    LAYOUT: ClassVar[Layout] = LAYOUT
 
     @property
     def n_points(self) -> int:
@@ -148,60 +169,6 @@ class NlModeBranch:
             failed=self.failed,
             message=self.message,
         )
-
-    # -- files -------------------------------------------------------------------
-    def save(self, path: str | Path) -> Path:
-        """Write to HDF5 atomically."""
-        import h5py
-
-        from ..io import atomic_path
-
-        path = Path(path)
-        with atomic_path(path) as tmp, h5py.File(tmp, "w") as h:
-            for name in POINT_ARRAYS:
-                h.create_dataset(name, data=getattr(self, name))
-            for name in ("linear_hz", "lin_phi", "lin_c", "obs"):
-                h.create_dataset(name, data=getattr(self, name))
-            a = h.attrs
-            for name in (
-                "mode",
-                "f_stuck_hz",
-                "nt",
-                "n",
-                "completed",
-                "failed",
-                "message",
-                "label",
-            ):
-                a[name] = getattr(self, name)
-            a["harmonics"] = np.asarray(self.harmonics, dtype=int)
-            a["output_names"] = json.dumps(list(self.output_names))
-            a["timings"] = json.dumps(self.timings)
-        return path
-
-    @classmethod
-    def load(cls, path: str | Path) -> NlModeBranch:
-        import h5py
-
-        with h5py.File(path, "r") as h:
-            kw = {name: h[name][()] for name in POINT_ARRAYS}
-            a = h.attrs
-            return cls(
-                mode=int(a["mode"]),
-                f_stuck_hz=float(a["f_stuck_hz"]),
-                linear_hz=h["linear_hz"][()],
-                **{k: h[k][()] for k in ("lin_phi", "lin_c", "obs") if k in h},
-                harmonics=tuple(int(v) for v in a["harmonics"]),
-                nt=int(a["nt"]),
-                n=int(a["n"]),
-                output_names=tuple(json.loads(a["output_names"])),
-                completed=bool(a["completed"]),
-                failed=bool(a["failed"]),
-                message=str(a["message"]),
-                label=str(a["label"]),
-                timings=json.loads(a["timings"]),
-                **kw,
-            )
 
     def to_csv(self, path: str | Path, unit: str = "m") -> Path:
         """One row per point: amplitude, frequency, damping, energy, status counts, outputs."""

@@ -1,0 +1,1 @@
+"""Reading and writing hbm's records (the HDF5 layout of a branch or backbone)."""
