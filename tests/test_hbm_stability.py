@@ -452,24 +452,38 @@ def test_the_band_end_is_reached_by_smaller_steps_when_the_guess_fails():
     from the step's own solution fails at the band end; frequency steps from the last point,
     halved while they fail, still put the last point exactly on it (the CF sweep's cylinder
     at 5 kN needed this)."""
-    from types import SimpleNamespace
-
-    from workbench.hbm.continuation import _band_end
+    from workbench.hbm.path.engine import reach_end
+    from workbench.hbm.path.problem import Solution
+    from workbench.hbm.path.rows import Rows
+    from workbench.hbm.path.step import StepRule
 
     class Stub:  # the solution is x = w^2; Newton converges only from a guess whose own
-        force_refresh = False  # frequency sqrt(x0) lies at most 0.3 rad/s below the one asked
+        start, end = 10.0, 11.0  # frequency sqrt(x0) lies at most 0.3 rad/s below the one asked
 
         def __init__(self):
             self.calls = []
+            self.rows = Rows(("w",))
 
-        def solve_natural(self, x0, w):
+        def solve_at(self, x0, w):
             w0 = float(np.sqrt(x0[0]))
             ok = 0.0 <= w - w0 <= 0.3
             self.calls.append((w0, w, ok))
-            return SimpleNamespace(converged=ok, x=np.array([w * w]), its=3, reason="stub")
+            return Solution(np.array([w]), w, ok, 3, "stub", np.array([w * w]))
+
+        def end_guess(self, p, q):
+            return p.raw + (self.end - p.param) / (q.param - p.param) * (q.raw - p.raw)
+
+        def refresh(self):
+            pass
+
+        def record(self, p, at_end=False):
+            self.rows.add(w=(p.param, p.raw[0], at_end))
 
     corr = Stub()
-    end = _band_end(corr, np.array([100.0]), 10.0, np.array([144.0]), 12.0, 11.0)
-    assert end.converged and end.x[0] == 121.0
+    rule = StepRule(mode="arclength", ds0=0.1, ds_min=1e-3, ds_max=0.2, end="retry")
+    cur = Solution(np.array([10.0]), 10.0, True, 3, "", np.array([100.0]))
+    new = Solution(np.array([12.0]), 12.0, True, 3, "", np.array([144.0]))
+    assert reach_end(corr, rule, cur, new)
+    assert corr.rows.cols["w"] == [(11.0, 121.0, True)]
     assert not any(ok for _, _, ok in corr.calls[:3])  # interpolated (twice), then the step's
     assert all(w <= 11.0 for _, w, _ in corr.calls)

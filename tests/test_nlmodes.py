@@ -247,18 +247,19 @@ def test_condensed_form_matches_all_dofs():
 
 def test_plateau_rule():
     """The amplitude-limit rule fires on a flat amplitude with rising damping only."""
-    from workbench.hbm.nlmodes import _plateau, _Stop
+    from workbench.hbm.nlmode_path import plateau
+    from workbench.hbm.path.problem import Stop
 
     flat = dict(amplitude=[1.0, 1.0005, 1.001, 1.001, 1.0012, 1.0015], damping_ratio=[])
     flat["damping_ratio"] = [0.010, 0.011, 0.012, 0.013, 0.0125, 0.0121]
-    with pytest.raises(_Stop, match="amplitude stalls at 1.002"):
-        _plateau(flat, 6)
-    _plateau(flat, 0)  # off
-    _plateau(flat, 7)  # too few points yet
+    with pytest.raises(Stop, match="amplitude stalls at 1.002"):
+        plateau(flat, 6)
+    plateau(flat, 0)  # off
+    plateau(flat, 7)  # too few points yet
     rising = dict(amplitude=[1.0, 1.01, 1.02, 1.03, 1.04, 1.05], damping_ratio=[0.01] * 5 + [0.02])
-    _plateau(rising, 6)  # the amplitude still grows
+    plateau(rising, 6)  # the amplitude still grows
     level = dict(amplitude=flat["amplitude"], damping_ratio=[0.010] * 5 + [0.0119])
-    _plateau(level, 6)  # the damping does not rise by a fifth
+    plateau(level, 6)  # the damping does not rise by a fifth
 
 
 def test_chord_and_krylov_newton_land_on_the_same_points():

@@ -33,6 +33,10 @@ from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
 from .fourier import Fourier, default_nt
 from .options import SolverOptions
+from .path.engine import NUMERICAL, follow, norm
+from .path.problem import LostContact, Solution, Stop
+from .path.rows import Rows
+from .path.step import StepRule
 from .peak import insert_peaks, refine_peaks
 from .ports import observation
 from .small import make_corrector
@@ -43,46 +47,203 @@ from .system import System
 log = logging.getLogger(__name__)
 
 TWO_PI = 2.0 * np.pi
+_DTYPES = dict(
+    stable=bool, stability=np.int8, stability_how=np.int8, status=np.int8, newton_its=int
+)
 
 
-class _Stop(Exception):
-    def __init__(self, message: str, failed: bool, completed: bool = False):
-        super().__init__(message)
-        self.failed, self.completed = failed, completed
+class ForcedResponse:
+    """The forced response at one level as a path problem (:mod:`.path.engine`).
 
+    Unknowns ``x`` (m) and ``w`` (rad/s), scaled ``y = (x / u_ref, w / w_ref)``.
+    Metric: ``|dy|^2 = sum (a_j dy_j)^2`` with ``a = (c_j / xi, 1 / band)``: the
+    unknowns relative to the largest solution norm met so far (``c_j =
+    dc_weight`` for the mean components, 1 otherwise) and the frequency
+    relative to the band. A point's row: outputs, contact status, energies,
+    Hill's verdict (:class:`.stability_path.StabilityPath`).
+    """
 
-class _Recorder:
-    """Collects the points of a branch; builds the Branch record at the end."""
+    def __init__(self, hb, corr, opts, level, band_hz, u_ref, path, timings, bar, progress):
+        self.hb, self.corr, self.opts, self.level = hb, corr, opts, level
+        self.f_lo, self.f_hi = band_hz
+        self.start, self.end = TWO_PI * self.f_lo, TWO_PI * self.f_hi
+        self.u_ref, self.w_ref = u_ref, corr.w_ref
+        self.path, self.timings, self.bar, self.progress = path, timings, bar, progress
+        self.rows = Rows(_ARRAYS)
+        self.band_s = (self.end - self.start) / self.start
+        self.xi = 1e-300  # the largest scaled solution norm so far
+        self.N = hb.N
+        self.cw = np.ones(self.N)
+        if hb.fourier.has_dc:
+            self.cw[: hb.n_s] = opts.dc_weight
 
-    def __init__(self):
-        self.rows: dict[str, list] = {k: [] for k in _ARRAYS}
+    # -- the corrector, in scaled variables ------------------------------------------
+    def y_of(self, x: np.ndarray, w: float) -> np.ndarray:
+        return np.concatenate([x / self.u_ref, [w / self.w_ref]])
 
-    def add(self, **kw) -> None:
-        for k, v in kw.items():
-            self.rows[k].append(v)
+    def _sol(self, res) -> Solution:
+        y = self.y_of(res.x, res.omega) if res.converged else None
+        return Solution(y, res.omega, res.converged, res.its, res.reason, res.x)
 
-    def arrays(self, n_out: int, nh: int, n_el: int, N: int) -> dict[str, np.ndarray]:
-        shapes = dict(
-            out_amp=(0, n_out),
-            out_h1=(0, n_out),
-            out_rms=(0, n_out),
-            out_harm=(0, nh, n_out),
-            status=(0, n_el),
-            friction_energy=(0, n_el),
-            x=(0, N),
+    def first_point(self) -> Solution:
+        """Frequency fixed at the band start; the level raised in steps if need be."""
+        hb, corr, w0 = self.hb, self.corr, self.start
+        res = corr.solve_natural(hb.stuck_solution(w0), w0)
+        if not res.converged and self.level > 0:
+            res = _ramp_level(hb, corr, w0, self.level)
+        if not res.converged:
+            raise Stop(
+                f"the corrector failed at the band start f = {self.f_lo:.6g} Hz "
+                f"(SNES: {res.reason})",
+                failed=True,
+            )
+        self.add(res.x, w0, res.its)
+        return Solution(self.y_of(res.x, w0), w0, True, res.its, res.reason, res.x)
+
+    def metric(self) -> np.ndarray:
+        xi = max(self.xi, 1e-300)
+        return np.concatenate([self.cw / xi, [1.0 / self.band_s]])
+
+    def tangent(self, p: Solution) -> np.ndarray:
+        tx, tw = self.corr.tangent(p.raw / self.u_ref, p.param / self.w_ref)
+        return np.concatenate([tx, [tw]])
+
+    def first_direction(self, p: Solution, m: np.ndarray) -> np.ndarray:
+        """The tangent at the first point, frequency increasing."""
+        t = self.tangent(p)
+        t /= norm(t, m)
+        return t
+
+    def _constraint(self, t, m, yp, center=None, ds=0.0) -> Constraint:
+        nx = self.N
+        return Constraint(t[:nx], t[nx], m[:nx] ** 2, m[nx] ** 2, yp[:nx], yp[nx], center, ds)
+
+    def _arclength(self, y0: np.ndarray, con: Constraint) -> Solution:
+        nx = self.N
+        return self._sol(self.corr.solve_arclength(y0[:nx] * self.u_ref, y0[nx] * self.w_ref, con))
+
+    def solve_plane(self, y0, yp, t, m) -> Solution:
+        return self._arclength(y0, self._constraint(t, m, yp))
+
+    def solve_sphere(self, p, yp, t, m, ds) -> Solution:
+        nx = self.N
+        return self._arclength(yp, self._constraint(t, m, yp, (p.y[:nx], p.y[nx]), ds))
+
+    def solve_at(self, guess: np.ndarray, param: float) -> Solution:
+        return self._sol(self.corr.solve_natural(guess, param))
+
+    def natural_step(self, p: Solution, prev: Solution | None, t, ds: float) -> Solution:
+        """Frequency stepping: ``ds`` in rad/s, the secant extrapolated as the guess."""
+        x, w = p.raw, p.param
+        wn = min(w + ds, self.end)
+        guess = (
+            x
+            if prev is None or self.opts.predictor == "constant"
+            else x + (x - prev.raw) * (wn - w) / (w - prev.param)
         )
-        out = {}
-        for k, v in self.rows.items():
-            if v:
-                out[k] = np.array(v)
-            else:
-                out[k] = np.zeros(shapes.get(k, (0,)))
-        out["stable"] = out["stable"].astype(bool)
-        out["stability"] = out["stability"].astype(np.int8)
-        out["stability_how"] = out["stability_how"].astype(np.int8)
-        out["status"] = out["status"].astype(np.int8)
-        out["newton_its"] = out["newton_its"].astype(int)
-        return out
+        return self.solve_at(guess, wn)
+
+    def end_guess(self, p: Solution, q: Solution) -> np.ndarray:
+        return p.raw + (self.end - p.param) / (q.param - p.param) * (q.raw - p.raw)
+
+    def change(self, p: Solution, q: Solution) -> float:
+        """Not watched: the forced response's steps are held by angle and correction."""
+        return 0.0
+
+    def refresh(self) -> None:
+        self.corr.force_refresh = True
+
+    def after_point(self) -> None:
+        """Nothing to check: the row and the progress bar are done in :meth:`record`."""
+
+    def record(self, p: Solution, at_end: bool = False) -> None:
+        self.add(p.raw, p.param, p.its)
+
+    # -- one row per point -------------------------------------------------------------
+    def add(self, x: np.ndarray, w: float, its: int) -> None:
+        """Record the point (x, w) solved in ``its`` Newton iterations."""
+        hb, corr, opts, timings = self.hb, self.corr, self.opts, self.timings
+        t0 = time.perf_counter()
+        ev = corr.evaluated(x, w)
+        pd = hb.point_data(ev, n_fine=opts.n_fine)
+        timings["post"] += time.perf_counter() - t0
+        if pd.lost_contact:
+            raise LostContact(
+                f"the damper has lost contact at f = {w / TWO_PI:.6g} Hz: at some instant of the "
+                "period no closed contact holds a body that only its contacts support (a "
+                "singular state); lower the excitation or raise the preload",
+                failed=True,
+            )
+        if self.path is not None:
+            verdict, max_real, how = self.path.at_point(ev)
+        else:
+            verdict, max_real, how = UNKNOWN, float("nan"), HOW_NONE
+        self.rows.add(
+            freq_hz=w / TWO_PI,
+            stable=verdict == STABLE,
+            stability=verdict,
+            stability_how=how,
+            newton_its=its,
+            energy_residual=pd.energy_residual,
+            accuracy=pd.accuracy,
+            out_amp=pd.out_amp,
+            out_h1=pd.out_h1,
+            out_rms=pd.out_rms,
+            out_harm=pd.out_harm,
+            status=pd.status,
+            friction_energy=pd.friction_energy,
+            x=x.copy(),
+            work_ext=pd.work_ext,
+            work_visc=pd.work_visc,
+            work_friction=pd.work_friction,
+            work_normal=pd.work_normal,
+            max_floquet_real=max_real,
+        )
+        xd = x / self.u_ref
+        if hb.fourier.has_dc:
+            xd = xd.copy()
+            xd[: hb.n_s] *= opts.dc_weight
+        self.xi = max(self.xi, float(np.linalg.norm(xd)))
+        n = self.rows.n
+        f, f_lo, f_hi = w / TWO_PI, self.f_lo, self.f_hi
+        self.bar.n = round(min(max(f - f_lo, 0.0), f_hi - f_lo), 6)
+        self.bar.set_postfix_str(f"{f:.4g} Hz, {n} pts", refresh=False)
+        self.bar.update(0)  # redraws at most every 0.5 s
+        if self.progress is not None:
+            self.progress((f - f_lo) / (f_hi - f_lo), f, n)
+
+    def say(self, what: str, **ctx) -> str:
+        """The words of a stop (see :func:`.path.engine.follow`)."""
+        opts, n = self.opts, self.rows.n
+        arc = opts.continuation == "arclength"
+        if what == "max_points":
+            at = f" at f = {ctx['at'].param / TWO_PI:.6g} Hz" if arc else ""
+            return f"stopped after max_points = {opts.max_points} points{at}"
+        if what == "failed" and arc:
+            return (
+                f"the corrector failed at f = {ctx['at'].param / TWO_PI:.6g} Hz after "
+                f"{n} points ({_why(ctx['sol'].reason)}) even with the smallest "
+                f"step ds_min = {opts.ds_min:g}; the branch so far is kept"
+            )
+        if what == "failed":
+            return (
+                f"frequency stepping failed at f = {ctx['sol'].param / TWO_PI:.6g} Hz (SNES: "
+                f"{ctx['sol'].reason}), a turning point? continuation = 'arclength' passes "
+                "them; the branch so far is kept"
+            )
+        if what == "end_failed":
+            return (
+                f"the branch passed the band end but the corrector failed at exactly "
+                f"f = {self.end / TWO_PI:.6g} Hz (SNES: {ctx['sol'].reason}); the last point "
+                f"kept is at {ctx['at'].param / TWO_PI:.6g} Hz"
+            )
+        if what == "below_start":
+            return f"the branch turned back below the band start after {n} points"
+        if what == "numerical":
+            e = ctx["error"]
+            at = f" after f = {self.rows.cols['freq_hz'][-1]:.6g} Hz" if n else ""
+            return f"stopped by a numerical error{at} ({n} points kept): {type(e).__name__}: {e}"
+        raise ValueError(f"no words for a stop of kind {what!r}")
 
 
 def frequency_response(
@@ -138,13 +299,8 @@ def frequency_response(
         u_ref = max(u_ref, float(slip.max()) * 1e-3)
     u_ref = u_ref if u_ref > 0 else 1e-9
     corr = make_corrector(hb, opts, u_ref, w0)
-    band_s = (w1 - w0) / w0
-    rec = _Recorder()
     timings = dict(setup=time.perf_counter() - t_start, stability=0.0, post=0.0)
-    # loop state: largest solution norm, points
-    state = dict(xi=1e-300, n=0)
     path = StabilityPath(hb, corr, opts) if opts.stability else None
-    message, failed, completed = "", False, False
 
     from ..log import progress_bar
 
@@ -152,98 +308,24 @@ def frequency_response(
         f"frf {label or f'level {level:g}'}", total=round(f_hi - f_lo, 6), unit="Hz"
     )
     bar = bar_ctx.__enter__()
-
-    def record(x: np.ndarray, w: float, its: int) -> None:
-        t0 = time.perf_counter()
-        ev = corr.evaluated(x, w)
-        pd = hb.point_data(ev, n_fine=opts.n_fine)
-        timings["post"] += time.perf_counter() - t0
-        if pd.lost_contact:
-            raise _Stop(
-                f"the damper has lost contact at f = {w / TWO_PI:.6g} Hz: at some instant of the "
-                "period no closed contact holds a body that only its contacts support (a "
-                "singular state); lower the excitation or raise the preload",
-                failed=True,
-            )
-        if path is not None:
-            verdict, max_real, how = path.at_point(ev)
-        else:
-            verdict, max_real, how = UNKNOWN, float("nan"), HOW_NONE
-        rec.add(
-            freq_hz=w / TWO_PI,
-            stable=verdict == STABLE,
-            stability=verdict,
-            stability_how=how,
-            newton_its=its,
-            energy_residual=pd.energy_residual,
-            accuracy=pd.accuracy,
-            out_amp=pd.out_amp,
-            out_h1=pd.out_h1,
-            out_rms=pd.out_rms,
-            out_harm=pd.out_harm,
-            status=pd.status,
-            friction_energy=pd.friction_energy,
-            x=x.copy(),
-            work_ext=pd.work_ext,
-            work_visc=pd.work_visc,
-            work_friction=pd.work_friction,
-            work_normal=pd.work_normal,
-            max_floquet_real=max_real,
-        )
-        xd = x / u_ref
-        if fourier.has_dc:
-            xd = xd.copy()
-            xd[: hb.n_s] *= opts.dc_weight
-        state["xi"] = max(state["xi"], float(np.linalg.norm(xd)))
-        state["n"] += 1
-        f = w / TWO_PI
-        bar.n = round(min(max(f - f_lo, 0.0), f_hi - f_lo), 6)
-        bar.set_postfix_str(f"{f:.4g} Hz, {state['n']} pts", refresh=False)
-        bar.update(0)  # redraws at most every 0.5 s
-        if progress is not None:
-            progress((f - f_lo) / (f_hi - f_lo), f, state["n"])
-
-    try:
-        # -- first point: frequency fixed at the band start ----------------------
-        x0 = hb.stuck_solution(w0)
-        res = corr.solve_natural(x0, w0)
-        if not res.converged and level > 0:
-            res = _ramp_level(hb, corr, w0, level)
-        if not res.converged:
-            raise _Stop(
-                f"the corrector failed at the band start f = {f_lo:.6g} Hz (SNES: {res.reason})",
-                failed=True,
-            )
-        record(res.x, w0, res.its)
-        if opts.continuation == "arclength":
-            completed = _arclength(hb, corr, opts, res.x, w0, w0, w1, band_s, u_ref, state, record)
-        else:
-            completed = _stepping(hb, corr, opts, res.x, w0, w0, w1, record)
-    except _Stop as stop:
-        message, failed, completed = str(stop), stop.failed, stop.completed
-        (log.warning if failed else log.info)("%s", message)
-    except (np.linalg.LinAlgError, FloatingPointError, ArithmeticError, RuntimeError) as e:
-        # a numerical breakdown inside the loop: report it, keep the branch so far
-        log.debug("continuation stopped", exc_info=True)
-        n = len(rec.rows["freq_hz"])
-        at = f" after f = {rec.rows['freq_hz'][-1]:.6g} Hz" if n else ""
-        failed = True
-        message = f"stopped by a numerical error{at} ({n} points kept): {type(e).__name__}: {e}"
-        log.warning("%s", message)
+    fr = ForcedResponse(hb, corr, opts, level, (f_lo, f_hi), u_ref, path, timings, bar, progress)
+    out = follow(fr, StepRule.forced(opts, w1 - w0))
+    message, failed, completed = out.message, out.failed, out.completed
+    rows = fr.rows
     try:
         try:
-            if opts.refine_peak and len(rec.rows["freq_hz"]) >= 3:
+            if opts.refine_peak and rows.n >= 3:
                 t0 = time.perf_counter()
-                insert_peaks(rec, record, refine_peaks(hb, corr, opts, rec))
+                insert_peaks(rows, fr.add, refine_peaks(hb, corr, opts, rows))
                 timings["peak"] = time.perf_counter() - t0
-        except _Stop as stop:  # a lost contact found while refining: report, keep the branch
+        except Stop as stop:  # a lost contact found while refining: report, keep the branch
             message = message or str(stop)
             failed = failed or stop.failed
         if path is not None:  # the verdicts decided once the branch is complete
             try:
-                path.finish(rec.rows)
-            except (np.linalg.LinAlgError, FloatingPointError, ArithmeticError, RuntimeError) as e:
-                path.abandon(rec.rows, f"{type(e).__name__}: {e}")
+                path.finish(rows.cols)
+            except NUMERICAL as e:
+                path.abandon(rows.cols, f"{type(e).__name__}: {e}")
     finally:
         bar_ctx.__exit__(None, None, None)
         corr.destroy()
@@ -261,7 +343,17 @@ def frequency_response(
         log.warning("%s%s", f"{label}: " if label else "", note)
         message = f"{message or ('reached the band end' if completed else '')}; {note}"
 
-    arrays = rec.arrays(O.shape[0], fourier.nh, system.n_el, hb.N)
+    n_out, nh, n_el = O.shape[0], fourier.nh, system.n_el
+    empty = dict(
+        out_amp=(0, n_out),
+        out_h1=(0, n_out),
+        out_rms=(0, n_out),
+        out_harm=(0, nh, n_out),
+        status=(0, n_el),
+        friction_energy=(0, n_el),
+        x=(0, hb.N),
+    )
+    arrays = rows.arrays(empty, _DTYPES)
     timings["total"] = time.perf_counter() - t_start
     st = dict(hb.stats)
     st.update(corr.stats)
@@ -350,217 +442,3 @@ def _why(reason: str) -> str:
     """The last corrector failure in words: a PETSc reason is quoted as SNES's."""
     first = reason.split(" ")[0]
     return f"SNES: {reason}" if first.isupper() or first.lstrip("-").isdigit() else reason
-
-
-def _arclength(
-    hb,
-    corr: Corrector,
-    opts: SolverOptions,
-    x: np.ndarray,
-    w: float,
-    w0: float,
-    w1: float,
-    band_s: float,
-    u_ref: float,
-    state: dict,
-    record,
-) -> bool:
-    """Pseudo-arc-length continuation in the scaled variables ``y = (x / u_ref, w / w_ref)``.
-
-    Metric: ``|dy|^2 = sum (a_j dy_j)^2`` with ``a = (c_j / xi, 1 / band)``: the unknowns
-    relative to the largest solution norm met so far (``c_j = dc_weight`` for the mean
-    components, 1 otherwise) and the frequency relative to the band.
-    """
-    w_ref = corr.w_ref
-    ds = opts.ds0
-    cos_max = np.cos(np.radians(opts.max_angle_deg))
-    nx = x.size
-    cw = np.ones(nx)
-    if hb.fourier.has_dc:
-        cw[: hb.n_s] = opts.dc_weight
-
-    def weights() -> np.ndarray:
-        xi = max(state["xi"], 1e-300)
-        return np.concatenate([cw / xi, [1.0 / band_s]])
-
-    def norm(v: np.ndarray, a: np.ndarray) -> float:
-        return float(np.sqrt(np.sum((a * v) ** 2)))
-
-    def y_of(xv: np.ndarray, wv: float) -> np.ndarray:
-        return np.concatenate([xv / u_ref, [wv / w_ref]])
-
-    # first direction: the tangent at the first point, frequency increasing
-    tx, tw = corr.tangent(x / u_ref, w / w_ref)
-    a = weights()
-    t = np.concatenate([tx, [tw]])
-    t /= norm(t, a)
-    prev: np.ndarray | None = None
-    turns = 0  # halvings of this step for a sharp turn; a kink (stick/slip transition) stays
-    while True:
-        if state["n"] >= opts.max_points:
-            raise _Stop(
-                f"stopped after max_points = {opts.max_points} points at f = {w / TWO_PI:.6g} Hz",
-                failed=False,
-            )
-        a = weights()
-        yc = y_of(x, w)
-        if prev is not None and opts.predictor == "tangent":
-            tx, tw = corr.tangent(x / u_ref, w / w_ref)
-            tt = np.concatenate([tx, [tw]])
-            tt /= norm(tt, a)
-            t = tt if np.sum(a * a * tt * t) >= 0 else -tt
-        elif prev is not None:  # secant (and the constant predictor's constraint)
-            t = (yc - prev) / norm(yc - prev, a)
-        yp = yc + ds * t
-        con = Constraint(t[:nx], t[nx], a[:nx] ** 2, a[nx] ** 2, yp[:nx], yp[nx])
-        y0 = yc if opts.predictor == "constant" else yp
-        res = corr.solve_arclength(y0[:nx] * u_ref, y0[nx] * w_ref, con)
-        if not res.converged and prev is not None:
-            # the plane ahead may miss a branch that turns sharply at a kink (a fold at a
-            # stick/slip or contact transition): cut it with the sphere of radius ds instead
-            sph = Constraint(
-                t[:nx],
-                t[nx],
-                a[:nx] ** 2,
-                a[nx] ** 2,
-                yp[:nx],
-                yp[nx],
-                center=(yc[:nx], yc[nx]),
-                ds=ds,
-            )
-            res = corr.solve_arclength(yp[:nx] * u_ref, yp[nx] * w_ref, sph)
-            if res.converged and norm(y_of(res.x, res.omega) - prev, a) < 0.5 * ds:
-                res.converged = False  # the sphere's other cut: back where we came from
-            if not res.converged:
-                # a fold exactly at a kink can turn the branch back almost on itself: try
-                # the plane ahead along the secant with its frequency part reversed, and keep
-                # the point only if it is off the incoming piece
-                tr = t.copy()
-                tr[nx] = -tr[nx]
-                tr /= norm(tr, a)
-                ypr = yc + ds * tr
-                ref = Constraint(tr[:nx], tr[nx], a[:nx] ** 2, a[nx] ** 2, ypr[:nx], ypr[nx])
-                res = corr.solve_arclength(ypr[:nx] * u_ref, ypr[nx] * w_ref, ref)
-                if res.converged:
-                    d = y_of(res.x, res.omega) - yc
-                    along = np.sum(a * a * d * t)  # the incoming piece runs along -t
-                    off = norm(d - along * t, a)
-                    if along >= 0 or off < 0.05 * norm(d, a):
-                        res.converged = False
-                        res.reason = "converged back onto the incoming branch (rejected)"
-        if not res.converged:
-            ds *= 0.5
-            corr.force_refresh = True
-            if ds < opts.ds_min:
-                raise _Stop(
-                    f"the corrector failed at f = {w / TWO_PI:.6g} Hz after "
-                    f"{state['n']} points ({_why(res.reason)}) even with the smallest "
-                    f"step ds_min = {opts.ds_min:g}; the branch so far is kept",
-                    failed=True,
-                )
-            continue
-        ynew = y_of(res.x, res.omega)
-        sec = ynew - yc
-        cosang = np.sum(a * a * sec * t) / max(norm(sec, a), 1e-300)
-        corr_ratio = norm(ynew - yp, a) / ds  # how far the corrector moved off the predictor
-        if (
-            (cosang < cos_max or corr_ratio > opts.max_correction)
-            and ds > 2 * opts.ds_min
-            and turns < 3
-        ):
-            # a sharp turn, or a correction so large that the corrector may have landed on
-            # another branch: halve (three times at most; what is still sharp then is a kink
-            # of the branch, where a stick/slip or contact transition changes its slope)
-            ds *= 0.5
-            turns += 1
-            continue
-        turns = 0
-        if res.omega > w1:
-            end = _band_end(corr, x, w, res.x, res.omega, w1)
-            if not end.converged:
-                raise _Stop(
-                    f"the branch passed the band end but the corrector failed at exactly "
-                    f"f = {w1 / TWO_PI:.6g} Hz (SNES: {end.reason}); the last point kept is "
-                    f"at {w / TWO_PI:.6g} Hz",
-                    failed=True,
-                )
-            record(end.x, w1, end.its)
-            return True
-        if res.omega < w0 * (1 - 1e-12):
-            raise _Stop(
-                f"the branch turned back below the band start after {state['n']} points",
-                failed=False,
-            )
-        prev = yc
-        x, w = res.x, res.omega
-        record(x, w, res.its)
-        if res.its > opts.target_newton:  # a slow corrector: a fresh LU for the next step
-            corr.force_refresh = True
-        factor = 2.0 if res.its == 0 else np.clip(np.sqrt(opts.target_newton / res.its), 0.5, 2.0)
-        ds = float(np.clip(ds * factor, opts.ds_min, opts.ds_max))
-
-
-def _band_end(corr: Corrector, x: np.ndarray, w: float, xn: np.ndarray, wn: float, w1: float):
-    """The solution exactly at the band end ``w1``, between the last point (x, w) and the
-    step (xn, wn) that passed it: from the interpolated guess (with the current LU, then a
-    fresh one), then from the step's own solution, then by frequency steps from the last
-    point (halved while they fail). Returns the last corrector result tried."""
-    interpolated = x + (w1 - w) / (wn - w) * (xn - x)
-    end = corr.solve_natural(interpolated, w1)
-    for guess in (interpolated, xn):
-        if end.converged:
-            return end
-        corr.force_refresh = True
-        end = corr.solve_natural(guess, w1)
-    xc, wc, dw = x, w, w1 - w
-    while not end.converged and dw > 1e-3 * (w1 - w):  # a stick/slip kink before the end
-        wt = min(wc + dw, w1)
-        corr.force_refresh = True
-        trial = corr.solve_natural(xc, wt)
-        if trial.converged:
-            xc, wc = trial.x, wt
-            if wt >= w1:
-                return trial
-        else:
-            dw *= 0.5
-            end = trial
-    return end
-
-
-def _stepping(
-    hb, corr: Corrector, opts: SolverOptions, x: np.ndarray, w: float, w0: float, w1: float, record
-) -> bool:
-    dw = opts.ds0 * (w1 - w0)
-    dw_min, dw_max = opts.ds_min * (w1 - w0), opts.ds_max * (w1 - w0)
-    prev: tuple[np.ndarray, float] | None = None
-    n = 1
-    while w < w1 * (1 - 1e-14):
-        if n >= opts.max_points:
-            raise _Stop(f"stopped after max_points = {opts.max_points} points", failed=False)
-        wn = min(w + dw, w1)
-        guess = (
-            x
-            if prev is None or opts.predictor == "constant"
-            else x + (x - prev[0]) * (wn - w) / (w - prev[1])
-        )
-        res = corr.solve_natural(guess, wn)
-        if not res.converged:
-            dw *= 0.5
-            corr.force_refresh = True
-            if dw < dw_min:
-                raise _Stop(
-                    f"frequency stepping failed at f = {wn / TWO_PI:.6g} Hz (SNES: "
-                    f"{res.reason}), a turning point? continuation = 'arclength' passes "
-                    "them; the branch so far is kept",
-                    failed=True,
-                )
-            continue
-        prev = (x, w)
-        x, w = res.x, wn
-        record(x, w, res.its)
-        if res.its > opts.target_newton:
-            corr.force_refresh = True
-        n += 1
-        factor = 2.0 if res.its == 0 else np.clip(np.sqrt(opts.target_newton / res.its), 0.5, 2.0)
-        dw = float(np.clip(dw * factor, dw_min, dw_max))
-    return True

@@ -49,7 +49,6 @@ from __future__ import annotations
 
 import logging
 import time
-from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
@@ -58,8 +57,13 @@ from ..errors import InputError, check_choice, check_int, check_range
 from .epmc import TWO_PI, Epmc
 from .epmc_condensed import EpmcCondensed
 from .fourier import Fourier
-from .nlmode_branch import POINT_ARRAYS, NlModeBranch
+from .nlmode_branch import NlModeBranch
 from .nlmode_corrector import Snes
+from .nlmode_path import Backbone
+from .path.engine import NUMERICAL, follow
+from .path.problem import Stop
+from .path.rows import Rows
+from .path.step import StepRule
 from .ports import observation
 from .system import System
 
@@ -229,227 +233,28 @@ def nonlinear_mode(
     check_range("amplitude_range[0]", a0, 0.0, lo_open=True)
     check_range("amplitude_range[1]", a1, a0, lo_open=True)
     n_steps = check_int("n_steps", n_steps, 1)
-    rows: dict[str, list] = {k: [] for k in POINT_ARRAYS}
     lag = check_int("jacobian_lag", jacobian_lag, 1)
     snes = Snes(prob, tol, tol_stall, max_newton, lag=lag, linear=linear)
     # chord iterations converge linearly: more of them per point, same step control
     its_scale = 1.0 if lag == 1 or snes.linear == "krylov" else 2.5
     snes.set_max_it(round(max_newton * its_scale))
-    message, failed, completed = "", False, False
-    s0, s1 = np.log(a0), np.log(a1)
-    phi1_ref = None
     f_top = float(max(np.atleast_1d(levels))) if levels is not None and f1 is not None else 0.0
     f1v = np.asarray(f1, complex).ravel() if f1 is not None else None
     s_slip = float(np.log(0.999 * a_slip)) if system.n_el else -np.inf
-
-    ys: list[tuple[np.ndarray, float]] = []  # the unknowns of every recorded point
-
-    def record(y: np.ndarray, a: float, its: int) -> dict[str, Any]:
-        nonlocal phi1_ref
-        y_unknowns = (y.copy(), float(a))
-        y, a = prob.physical(y, a)
-        pt = prob.point(y, a, phi1_ref)
-        if phi1_ref is None:
-            phi1_ref = pt["phi1"]
-        if pt["lost"]:
-            raise _Lost(
-                f"the damper has lost contact at modal amplitude {a:.4g}: a singular "
-                "state; the backbone ends here",
-                False,
-            )
-        for k in POINT_ARRAYS:
-            if k != "newton_its":
-                rows[k].append(pt[k])
-        rows["newton_its"].append(its)
-        ys.append(y_unknowns)
-        if (
-            f_top > 0
-            and a * pt["xi"] * TWO_PI * pt["freq_hz"] > 2.0 * f_top * abs(np.conj(pt["phi1"]) @ f1v)
-            and np.any(pt["status"] > 0)
-        ):
-            raise _Stop(
-                f"covers the largest level ({f_top:g}): its peak is below modal amplitude {a:.4g}",
-                False,
-                completed=True,
-            )
-        return pt
+    rule = StepRule.backbone(n_steps, max_points, max_change, max_fold_points, its_scale)
 
     from ..log import progress_bar
 
-    N = prob.n_unknowns - 2
-    span = s1 - s0
-    # metric of the arc length: the shape relative to its size, frequency and xi relative to
-    # the linear frequency (a change of a third counts as the whole amplitude range), ln a
-    # relative to the range
-    mw = np.empty(N + 3)
-    mw[:N] = 1.0 / max(float(np.linalg.norm(prob.linear_guess()[:N])), 1e-300)
-    # the mean position does not count (as dc_weight = 0 in the FRF): a stuck slider's
-    # offset jumps where slip starts
-    mw[:N][prob.dc_mask()[:N]] = 0.0
-    mw[N] = mw[N + 1] = 3.0
-    mw[N + 2] = 1.0 / span
-    ds = 1.0 / n_steps
-    ds_max, ds_min = 2.0 / n_steps, 1e-5
-    cos_max = np.cos(np.radians(30.0))
-
-    def norm(v: np.ndarray) -> float:
-        return float(np.sqrt(np.sum((mw * v) ** 2)))
-
-    def w_d(Y: np.ndarray) -> tuple[float, float]:
-        y, _ = snes.unscaled(Y)
-        return y[N], y[N + 1] / (2 * y[N])
-
-    try:
-        with progress_bar(f"nlmode {label or mode}", total=round(span, 6), unit="ln a") as bar:
-            Y, ok, its = snes.solve(snes.scaled(prob.linear_guess(), s0))
-            if not ok:
-                raise _Stop(f"the corrector failed at the first amplitude {a0:.4g}", True)
-            prev = record(snes.unscaled(Y)[0], a0, its)
-            Y_prev: np.ndarray | None = None
-            turns = 0
-            arc = 0  # > 0: steps left in pseudo-arc-length mode (a fold in amplitude)
-            hist = [Y]
-            s_top, since_top = float(Y[-1]), 0
-            n_solves = 0
-            while True:
-                if len(rows["amplitude"]) >= max_points:
-                    raise _Stop(f"stopped after max_points = {max_points}", False)
-                n_solves += 1
-                if n_solves > 5 * max_points:  # refused and halved steps: never without end
-                    raise _Stop(
-                        f"stopped after {n_solves - 1} corrector solves for "
-                        f"{len(rows['amplitude'])} points (steps refused or halved over and "
-                        "over); the backbone so far is kept",
-                        True,
-                    )
-                if Y_prev is None:
-                    t = np.zeros(N + 3)
-                    t[-1] = span  # along ln a: the linear mode does not change
-                else:
-                    t = (Y - Y_prev) / norm(Y - Y_prev)
-                if arc:  # the plane normal to the secant, a predictor along it
-                    Yp = Y + ds * t
-                    Yn, ok, its = snes.solve(Yp, mw**2 * t, Yp)
-                else:  # the next amplitude, the secant extrapolated to it as predictor
-                    dsn = ds * span
-                    if Y[-1] < s_slip - 1e-9:
-                        # every contact sticks below the first slip: the mode is linear
-                        # there, so one step goes to the point just below it (a kink)
-                        dsn = s_slip - Y[-1]
-                    Yp = Y + t * (dsn / t[-1]) if t[-1] > 1e-12 * span else Y.copy()
-                    Yp[-1] = Y[-1] + dsn
-                    Yn, ok, its = snes.solve(Yp)
-                if ok:
-                    (w0, d0), (w1, d1) = w_d(Y), w_d(Yn)
-                    change = max(abs(w1 - w0) / w0, abs(d1 - d0) / max(abs(d0), 1e-3))
-                    step = Yn - Y
-                    cosang = float(np.sum(mw**2 * step * t)) / max(norm(step), 1e-300)
-                    if (
-                        (change > max_change or (arc and cosang < cos_max))
-                        and ds > 2 * ds_min
-                        and turns < 4
-                    ):
-                        ok = False
-                        turns += 1
-                    elif cosang < 0.0 and Y_prev is not None:
-                        ok = False  # back along the branch behind us: never accepted
-                    elif len(hist) > 2 and min(norm(Yn - h) for h in hist[:-2]) < 0.3 * ds:
-                        ok = False  # retracing the branch already computed
-                if not ok:
-                    ds *= 0.5
-                    if not arc and ds < 1e-3 / n_steps and Y_prev is not None:
-                        arc, ds = 8, 1.0 / n_steps  # natural stepping stalls: a fold?
-                        continue
-                    if ds < ds_min:
-                        raise _Stop(
-                            f"the corrector failed after modal amplitude "
-                            f"{np.exp(Y[-1]):.4g} even with the smallest step; the backbone "
-                            "so far is kept",
-                            True,
-                        )
-                    continue
-                turns = 0
-                if Yn[-1] >= s1:  # the last point exactly at the largest amplitude
-                    th = (s1 - Y[-1]) / (Yn[-1] - Y[-1])
-                    Yg = Y + th * (Yn - Y)
-                    Yg[-1] = s1
-                    Ye, ok_e, its_e = snes.solve(Yg)
-                    if ok_e:
-                        record(snes.unscaled(Ye)[0], a1, its_e)
-                        break
-                    # the point exactly at the largest amplitude did not converge: the
-                    # converged step past it ends the backbone, so the range is covered
-                    log.info(
-                        "the point at the largest amplitude %.4g did not converge; the "
-                        "backbone ends at the converged step past it (%.4g)",
-                        a1,
-                        np.exp(Yn[-1]),
-                    )
-                    try:
-                        record(snes.unscaled(Yn)[0], float(np.exp(Yn[-1])), its)
-                    except _Lost:
-                        raise _Stop(
-                            f"the corrector failed at the largest amplitude {a1:.4g} and "
-                            "the step past it loses contact: the backbone ends at "
-                            f"{np.exp(Y[-1]):.4g}",
-                            True,
-                        ) from None
-                    break
-                if Yn[-1] < s0:
-                    raise _Stop("the backbone turned back below the smallest amplitude", False)
-                if arc:  # back to stepping in amplitude once it increases again
-                    arc = arc - 1 if Yn[-1] > Y[-1] else 8
-                    if Yn[-1] < s_top - np.log(2.0):
-                        raise _Stop(
-                            f"the backbone folds back in amplitude after {np.exp(s_top):.4g} "
-                            "and does not turn again within a factor 2 (the mode changes "
-                            "character, or the free damper's mean position does): it ends "
-                            "here",
-                            False,
-                        )
-                if Yn[-1] > s_top:
-                    s_top, since_top = float(Yn[-1]), 0
-                else:
-                    since_top += 1
-                    if since_top > max_fold_points:
-                        raise _Stop(
-                            f"the backbone folds back in amplitude after {np.exp(s_top):.4g} "
-                            f"and has not passed it again in {max_fold_points} points (the "
-                            "mode changes character, or the free damper's mean position "
-                            "does): it ends here",
-                            False,
-                        )
-                try:
-                    prev = record(snes.unscaled(Yn)[0], float(np.exp(Yn[-1])), its)
-                except _Lost:
-                    if Yn[-1] - Y[-1] > np.log(1.02) and ds > 2 * ds_min:
-                        ds *= 0.5  # close in on the loss of contact (the last point's
-                        continue  # amplitude bounds every level the synthesis can reach)
-                    raise
-                Y_prev, Y = Y, Yn
-                hist.append(Y)
-                if f_top > 0:  # only a backbone for given levels stops at a plateau
-                    _plateau(rows, plateau_points)
-                bar.n = round(min(max(Y[-1] - s0, 0.0), span), 6)
-                bar.set_postfix_str(
-                    f"{prev['freq_hz']:.4g} Hz, D {prev['damping_ratio']:.3g}", refresh=False
-                )
-                bar.update(0)
-                grow = 1.5 if its <= 4 * its_scale else (0.7 if its > 8 * its_scale else 1.0)
-                ds = float(np.clip(ds * grow, ds_min, ds_max))
-            completed = True
-    except _Stop as stop:
-        message, failed, completed = str(stop), stop.failed, stop.completed
-        (log.warning if failed else log.info)("%s", message)
-    except (np.linalg.LinAlgError, FloatingPointError, ArithmeticError, RuntimeError) as e:
-        failed = True
-        message = f"stopped by a numerical error: {type(e).__name__}: {e}"
-        log.warning("%s", message)
+    span = np.log(a1) - np.log(a0)
+    with progress_bar(f"nlmode {label or mode}", total=round(span, 6), unit="ln a") as bar:
+        bb = Backbone(prob, snes, (a0, a1), f_top, f1v, s_slip, plateau_points, rule, bar)
+        out = follow(bb, rule)
+    message, failed, completed = out.message, out.failed, out.completed
+    rows = bb.rows
     n_el = system.n_el
     prob_phys = prob.phys if isinstance(prob, EpmcCondensed) else prob
 
     def branch() -> NlModeBranch:
-        arr: dict[str, np.ndarray] = {}
         shapes = dict(
             friction_energy=(0, n_el),
             status=(0, n_el),
@@ -457,10 +262,7 @@ def nonlinear_mode(
             out_h1=(0, O.shape[0]),
             psi=(0, fourier.nh * system.n),
         )
-        for k, v in rows.items():
-            arr[k] = np.array(v) if v else np.zeros(shapes.get(k, (0,)))
-        arr["status"] = arr["status"].astype(np.int8)
-        arr["newton_its"] = arr["newton_its"].astype(int)
+        arr = rows.arrays(shapes, dict(status=np.int8, newton_its=int))
         timings = dict(
             total=time.perf_counter() - t_start,
             aft=prob.stats["t_aft"],
@@ -487,16 +289,16 @@ def nonlinear_mode(
         )
 
     try:
-        if f_top > 0 and len(ys) >= 2:
-            _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, refine_ratio)
-    except (_Stop, np.linalg.LinAlgError, FloatingPointError, ArithmeticError, RuntimeError) as e:
+        if f_top > 0 and rows.n >= 2:
+            _refine_at_peaks(branch, snes, bb.add, rows, f1v, levels, refine_ratio)
+    except (Stop, *NUMERICAL) as e:
         log.info("refinement at the peaks stopped: %s", e)
     finally:
         snes.destroy()
     return branch()
 
 
-def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) -> None:
+def _refine_at_peaks(branch, snes, record, rows: Rows, f1v, levels, ratio: float) -> None:
     """Add solved points at the synthesised peak of every level where the backbone is coarse.
 
     For each level (up to three passes) the peak's modal amplitude is found
@@ -525,7 +327,7 @@ def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) 
             j = int(np.searchsorted(a, s.peak_modal_amplitude))
             if not 0 < j < a.size or a[j] / a[j - 1] <= ratio or np.any(np.diff(a[: j + 1]) <= 0):
                 continue
-            (y0, p0), (y1, p1) = ys[j - 1], ys[j]
+            (y0, p0), (y1, p1) = rows.cols["z"][j - 1], rows.cols["z"][j]
             # the continuation parameter of the target (the physical amplitude is a_M)
             th = np.log(s.peak_modal_amplitude / a[j - 1]) / np.log(a[j] / a[j - 1])
             pt = float(np.exp(np.log(p0) + th * (np.log(p1) - np.log(p0))))
@@ -533,52 +335,15 @@ def _refine_at_peaks(branch, snes, record, rows, ys, f1v, levels, ratio: float) 
             Y, ok, its = snes.solve(Yg)
             if not ok:
                 continue
-            n_before = len(rows["amplitude"])
+            n_before = rows.n
             record(snes.unscaled(Y)[0], float(np.exp(Y[-1])), its)
-            if len(rows["amplitude"]) == n_before:
+            if rows.n == n_before:
                 continue
-            if not a[j - 1] < rows["amplitude"][-1] < a[j]:  # off its segment: dropped
-                for key in rows:
-                    rows[key].pop()
-                ys.pop()
+            if not a[j - 1] < rows.cols["amplitude"][-1] < a[j]:  # off its segment: dropped
+                rows.pop_last()
                 continue
-            for key in rows:  # move the new point into amplitude order
-                rows[key].insert(j, rows[key].pop())
-            ys.insert(j, ys.pop())
+            rows.insert_last_at(j)  # the new point into amplitude order
             added += 1
             nm = branch()
         if not added:
             return
-
-
-def _plateau(rows: dict[str, list], n: int) -> None:
-    """Stop where the amplitude has stalled over the last ``n`` points while damping grows.
-
-    Over ``n`` points within 0.2 % in modal amplitude while the damping ratio
-    rises by more than a fifth, the mode has met an amplitude limit (lift-off
-    or a stop): a larger force then raises the dissipation, not the
-    amplitude, which a single mode continued in amplitude cannot follow.
-    """
-    a, d = rows["amplitude"], rows["damping_ratio"]
-    if n < 2 or len(a) < n:
-        return
-    la = np.log(np.asarray(a[-n:], float))
-    d0, d1 = float(d[-n]), float(d[-1])
-    if la.max() - la.min() < 2e-3 and d1 > 1.2 * d0:
-        raise _Stop(
-            f"the modal amplitude stalls at {a[-1]:.4g} (within 0.2 % over {n} points) while "
-            f"the damping ratio rises from {d0:.3g} to {d1:.3g}: an amplitude limit (lift-off "
-            "or a stop), where a larger force raises the dissipation, not the amplitude; "
-            "the backbone ends here",
-            False,
-        )
-
-
-class _Stop(Exception):
-    def __init__(self, message: str, failed: bool, completed: bool = False):
-        super().__init__(message)
-        self.failed, self.completed = failed, completed
-
-
-class _Lost(_Stop):
-    """The damper has lost every contact at the point just solved (not recorded)."""

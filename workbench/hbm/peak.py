@@ -17,6 +17,7 @@ import numpy as np
 from .balance import HarmonicBalance
 from .corrector import Corrector
 from .options import SolverOptions
+from .path.rows import Rows
 
 TWO_PI = 2.0 * np.pi
 N_GRID = 15  # samples between the outer neighbours of the peaks
@@ -26,7 +27,7 @@ def refine_peaks(
     hb: HarmonicBalance,
     corr: Corrector,
     opts: SolverOptions,
-    rec: Any,
+    rows: Rows,
     keys: tuple[str, ...] = ("out_amp", "out_h1"),
 ) -> list[tuple[float, np.ndarray, int, int] | None]:
     """Search for the largest value of each ``key`` of output 0 around its largest computed one.
@@ -55,11 +56,10 @@ def refine_peaks(
 
     Returns, per key, the best trial (frequency in Hz, x, Newton iterations,
     its position in frequency order) when it beats the computed points, else
-    None; :func:`insert_peaks` records them. ``rec``: the branch's recorder
-    (``rows``: name -> list per point).
+    None; :func:`insert_peaks` records them. ``rows``: the branch's points.
     """
-    f = np.array(rec.rows["freq_hz"])
-    vals = {k: np.array([a[0] for a in rec.rows[k]]) for k in keys}
+    f = np.array(rows.cols["freq_hz"])
+    vals = {k: np.array([a[0] for a in rows.cols[k]]) for k in keys}
     tops = {k: int(np.argmax(v)) for k, v in vals.items()}
     tops = {k: i for k, i in tops.items() if 0 < i < len(f) - 1}  # not at a band end
     spans = {k: (max(i - 2, 0), min(i + 2, len(f) - 1)) for k, i in tops.items()}
@@ -67,7 +67,7 @@ def refine_peaks(
         (l1, h1), (l2, h2) = spans.values()
         if max(l1, l2) <= min(h1, h2):
             spans = dict.fromkeys(spans, (min(l1, l2), max(h1, h2)))
-    xs = rec.rows["x"]
+    xs = rows.cols["x"]
     lost: list[float] = []  # Hz of trials without contact, for the branch message
     cache: dict[float, tuple[Any, np.ndarray, int]] = {}  # Hz -> (point data, x, its)
     found: dict[str, tuple[float, np.ndarray, int, int] | None] = {}
@@ -154,7 +154,7 @@ def _search(key: str, solve, cache: dict, branch: dict, grid, opts):
     return fq, x, its
 
 
-def insert_peaks(rec: Any, record, found: list) -> None:
+def insert_peaks(rows: Rows, record, found: list) -> None:
     """Record the points ``refine_peaks`` found, each at its place in frequency order.
 
     ``found``: its results (None where a search found nothing better), all
@@ -168,5 +168,4 @@ def insert_peaks(rec: Any, record, found: list) -> None:
             continue
         done.add(fq)
         record(x, TWO_PI * fq, its)
-        for name in rec.rows:
-            rec.rows[name].insert(pos, rec.rows[name].pop())
+        rows.insert_last_at(pos)

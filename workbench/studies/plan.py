@@ -83,6 +83,7 @@ class Case:
 NLMODE_SOURCES = (
     "nlmodes.py",
     "nlmode_corrector.py",
+    "nlmode_path.py",
     "epmc.py",
     "epmc_condensed.py",
     "nlmode_branch.py",
