@@ -413,7 +413,7 @@ def test_a_failed_last_point_never_leaves_the_range_uncovered(monkeypatch):
     """The point exactly at the largest amplitude may fail to converge: the backbone then
     ends at the converged step past it (it still covers the range it claims), never at
     the point before with ``completed`` set as if it had reached the end."""
-    from workbench.hbm.nlmode_corrector import Snes
+    from workbench.hbm.nlmode_path import BackboneCorrector as Snes
 
     ex = sdof_jenkins()
     a_slip = slip_amplitude(ex.system, pick_mode(ex.system, ex.f1))

@@ -24,7 +24,6 @@ itself and factors it with PETSc's LU (for comparison studies).
 
 from __future__ import annotations
 
-import itertools
 import logging
 import time
 from dataclasses import dataclass
@@ -34,8 +33,8 @@ import scipy.linalg as sla
 
 from .balance import Evaluation, HarmonicBalance
 from .options import SolverOptions
+from .path.newton import Newton, NewtonTest
 
-_ids = itertools.count()
 log = logging.getLogger(__name__)
 
 
@@ -189,12 +188,10 @@ class Corrector:
         self.force_refresh = False
         self.constraint: Constraint | None = None
         self.w_fixed = 0.0
-        self._snes: dict[str, object] = {}
+        self._snes: dict[str, Newton] = {}
         self.stats = dict(
             n_factor=0, t_factor=0.0, n_snes=0, t_snes=0.0, ksp_its=0, n_stalled=0, n_failed=0
         )
-        self._hist: list[float] = []
-        self._own_ok = False
         # the last evaluation (SNES asks for the residual, then the Jacobian at the same point)
         self.ev: Evaluation | None = None
 
@@ -250,47 +247,55 @@ class Corrector:
         self.stats["t_factor"] += time.perf_counter() - t0
         return self.lu
 
-    # -- PETSc objects -----------------------------------------------------------
-    def _get_snes(self, kind: str):
+    # -- the Newton solver (one per kind) ------------------------------------------------
+    def _get_snes(self, kind: str) -> Newton:
         if kind in self._snes:
             return self._snes[kind]
-        from petsc4py import PETSc
-
         n = self.N + (1 if kind == "arclength" else 0)
-        comm = PETSc.COMM_SELF
-        snes = PETSc.SNES().create(comm)
-        prefix = f"upd_hbm{next(_ids)}_"
-        snes.setOptionsPrefix(prefix)
-        po = PETSc.Options()
-        po[f"{prefix}snes_linesearch_type"] = self.opts.line_search
-        if self.opts.line_search == "bt":
-            po[f"{prefix}snes_linesearch_max_it"] = self.opts.line_search_max_it
-        fvec = PETSc.Vec().createSeq(n, comm=comm)
         corr = self
 
-        def split(X):
-            a = X.getArray(readonly=True)
+        def split(a: np.ndarray) -> tuple[np.ndarray, float]:
             if kind == "arclength":
                 return a[:-1], float(a[-1])
             return a, corr.w_fixed
 
-        def function(snes, X, F):
-            xs, ws = split(X)
+        def function(Y: np.ndarray, out: np.ndarray) -> None:
+            xs, ws = split(Y)
             r = corr._res(xs, ws)
-            out = F.getArray()
             if kind == "arclength":
                 out[:-1] = r
                 out[-1] = corr.constraint.value(xs, ws)
             else:
                 out[:] = r
-            if not np.all(np.isfinite(out)):
-                out[:] = np.inf
 
-        snes.setFunction(function, fvec)
-        ksp = snes.getKSP()
-        if self.opts.jacobian == "fd":
-            # forward differences of the (augmented) residual, column by column: n + 1
-            # residual evaluations per Newton iteration (for comparison on small models)
+        opts = self.opts
+        newton = Newton(
+            n,
+            function,
+            self._finite_differences(kind, n) if opts.jacobian == "fd" else self._shell_lu(kind, n),
+            NewtonTest(
+                tol=opts.tol,
+                tol_stall=opts.tol_stall,
+                max_it=opts.max_newton,
+                bordered=kind == "arclength",
+                stagnation=opts.stagnation,
+            ),
+            line_search=opts.line_search,
+            ls_max_it=opts.line_search_max_it if opts.line_search == "bt" else None,
+            stats=self.stats,
+        )
+        self._snes[kind] = newton
+        return newton
+
+    def _finite_differences(self, kind: str, n: int):
+        """The linear solver of ``jacobian = "fd"``: forward differences of the (bordered)
+        residual, column by column (n + 1 residual evaluations per Newton iteration, for
+        comparison on small models), factored by a dense LU."""
+        corr = self
+
+        def linear(snes, ksp) -> None:
+            from petsc4py import PETSc
+
             fd: dict[str, object] = {}
 
             def fvalue(y: np.ndarray) -> np.ndarray:
@@ -324,13 +329,25 @@ class Corrector:
                 fd["J"] = J
                 Amat.assemble()
 
-            A = PETSc.Mat().createPython((n, n), FdShell(), comm=comm)
+            A = PETSc.Mat().createPython((n, n), FdShell(), comm=PETSc.COMM_SELF)
             A.setUp()
             snes.setJacobian(fd_jacobian, A, A)
             ksp.setType("preonly")
             ksp.getPC().setType("python")
             ksp.getPC().setPythonContext(FdPre())
-        else:
+
+        return linear
+
+    def _shell_lu(self, kind: str, n: int):
+        """The linear solver of the analytic Jacobian: the exact product as a shell matrix,
+        preconditioned by the LU of ``dr/dx`` (:class:`Factorization`), refreshed by the
+        mode's rule (newton: every iteration; lagged: GMRES, when it struggled; chord: on
+        request)."""
+        corr = self
+
+        def linear(snes, ksp) -> None:
+            from petsc4py import PETSc
+
             state: dict[str, object] = {}
 
             class Shell:
@@ -374,11 +391,12 @@ class Corrector:
                     else:
                         out[:] = corr.lu.solve(r)
 
-            A = PETSc.Mat().createPython((n, n), Shell(), comm=comm)
+            A = PETSc.Mat().createPython((n, n), Shell(), comm=PETSc.COMM_SELF)
             A.setUp()
 
             def jacobian(snes, X, Amat, Pmat):
-                xs, ws = split(X)
+                a = X.getArray(readonly=True)
+                xs, ws = (a[:-1], float(a[-1])) if kind == "arclength" else (a, corr.w_fixed)
                 state["x"], state["w"] = xs.copy(), ws
                 if kind == "arclength":
                     state["jw"] = corr._jw(xs, ws)
@@ -386,102 +404,23 @@ class Corrector:
                 Amat.assemble()
 
             snes.setJacobian(jacobian, A, A)
-            if self.mode == "lagged":
+            opts = corr.opts
+            if corr.mode == "lagged":
                 ksp.setType("gmres")
                 ksp.setPCSide(PETSc.PC.Side.RIGHT)
-                ksp.setTolerances(rtol=self.opts.ksp_rtol, atol=0.0, max_it=self.opts.ksp_max_it)
-                ksp.setGMRESRestart(self.opts.ksp_max_it)
+                ksp.setTolerances(rtol=opts.ksp_rtol, atol=0.0, max_it=opts.ksp_max_it)
+                ksp.setGMRESRestart(opts.ksp_max_it)
             else:
                 ksp.setType("preonly")
             pc = ksp.getPC()
             pc.setType("python")
             pc.setPythonContext(Pre())
-        snes.setMaxLinearSolveFailures(10**6)
-        snes.setMaxNonlinearStepFailures(10**6)
-        tol, max_it = self.opts.tol, self.opts.max_newton
-        tol_stall, stall = self.opts.tol_stall, 4
-        stag = self.opts.stagnation
-        reasons = PETSc.SNES.ConvergedReason
 
-        def converged(snes, it, norms):
-            F = snes.getFunction()[0].getArray(readonly=True)
-            X = snes.getSolution().getArray(readonly=True)
-            if not np.all(np.isfinite(F)):
-                return reasons.DIVERGED_FNORM_NAN
-            r = F[:-1] if kind == "arclength" else F
-            x = X[:-1] if kind == "arclength" else X
-            rn = np.abs(r).max(initial=0.0)
-            if log.isEnabledFor(logging.DEBUG):
-                log.debug(
-                    "%s it %d |r|_inf %.3e |x|_inf %.3e w %.9g",
-                    kind,
-                    it,
-                    rn,
-                    np.abs(x).max(initial=0.0),
-                    X[-1] * corr.w_ref if kind == "arclength" else corr.w_fixed * corr.w_ref,
-                )
-            scale = max(np.abs(x).max(initial=0.0), 1.0)
-            hist = corr._hist
-            if it == 0:
-                hist.clear()
-            hist.append(rn)
-            c_ok = kind != "arclength" or abs(F[-1]) <= 1e-9
-            if rn <= tol * scale and c_ok:
-                corr._own_ok = True
-                return reasons.CONVERGED_FNORM_ABS
-            # Newton stagnates on a kink of the piecewise-smooth residual (an element that
-            # just touches its slip limit): accept below the looser tolerance, else give up
-            if len(hist) > stall and hist[-1] > 0.5 * hist[-1 - stall] and rn <= 1e-4 * scale:
-                if rn <= tol_stall * scale and c_ok:
-                    corr.stats["n_stalled"] += 1
-                    corr._own_ok = True
-                    return reasons.CONVERGED_SNORM_RELATIVE
-                return reasons.DIVERGED_LOCAL_MIN
-            # far from a solution and not getting closer (the line search creeps along a
-            # kink the step straddles): give up now, a shorter step is cheaper
-            if stag and len(hist) > stag and hist[-1] > 0.5 * hist[-1 - stag]:
-                return reasons.DIVERGED_LOCAL_MIN
-            if it >= max_it:
-                return reasons.DIVERGED_MAX_IT
-            return reasons.ITERATING
-
-        snes.setConvergenceTest(converged)
-        snes.setTolerances(max_it=max_it + 1)
-        snes.setFromOptions()
-        del po[f"{prefix}snes_linesearch_type"]
-        if self.opts.line_search == "bt":
-            del po[f"{prefix}snes_linesearch_max_it"]
-        x = PETSc.Vec().createSeq(n, comm=comm)
-        self._snes[kind] = (snes, x)
-        return snes, x
+        return linear
 
     # -- solves --------------------------------------------------------------------
     def _run(self, kind: str, y0: np.ndarray) -> tuple[np.ndarray, bool, int, int, str]:
-        snes, X = self._get_snes(kind)
-        X.getArray()[:] = y0
-        self._own_ok = False  # set by our convergence test only
-        t0 = time.perf_counter()
-        try:
-            snes.solve(None, X)
-        except Exception as e:  # noqa: BLE001 - a PETSc/numerical failure is a failed step
-            self.stats["t_snes"] += time.perf_counter() - t0
-            return y0, False, 0, 0, f"exception: {type(e).__name__}: {e}"
-        self.stats["t_snes"] += time.perf_counter() - t0
-        self.stats["n_snes"] += 1
-        reason = snes.getConvergedReason()
-        its = snes.getIterationNumber()
-        kits = snes.getLinearSolveIterations()
-        self.stats["ksp_its"] += kits
-        name = _reason_name(reason)
-        y = X.getArray(readonly=True).copy()
-        # a positive reason that our test did not give (SNES stops with "converged" when a
-        # failed line search leaves a step below stol |x|, as cp does) is not a solution
-        ok = bool(reason > 0 and self._own_ok and np.all(np.isfinite(y)))
-        if reason > 0 and not self._own_ok:
-            name = f"{name} (declared by SNES with the residual not converged)"
-        if not ok:
-            self.stats["n_failed"] += 1
-        return y, ok, its, kits, name
+        return self._get_snes(kind).run(y0)
 
     def solve_natural(self, x0: np.ndarray, omega: float) -> CorrectorResult:
         """Solve r(x, w) = 0 at fixed w from x0 (m)."""
@@ -507,20 +446,6 @@ class Corrector:
         return -self.lu.z2, 1.0
 
     def destroy(self) -> None:
-        for snes, x in self._snes.values():
-            snes.destroy()
-            x.destroy()
+        for newton in self._snes.values():
+            newton.destroy()
         self._snes.clear()
-
-
-_REASONS: dict[int, str] = {}
-
-
-def _reason_name(reason: int) -> str:
-    if not _REASONS:
-        from petsc4py import PETSc
-
-        for k, v in PETSc.SNES.ConvergedReason.__dict__.items():
-            if not k.startswith("_") and isinstance(v, int) and k != "ITERATING":
-                _REASONS.setdefault(v, k)
-    return _REASONS.get(int(reason), str(reason))

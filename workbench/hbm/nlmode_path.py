@@ -1,8 +1,8 @@
-"""A nonlinear mode's backbone as a path problem (:mod:`.path.engine`).
+"""A nonlinear mode's backbone as a path problem (:mod:`.path.engine`), and its corrector.
 
 Unknowns ``Y = [y / var_scale, ln a]`` of the EPMC problem (:mod:`.epmc`,
-:mod:`.epmc_condensed`) as the corrector (:mod:`.nlmode_corrector`) scales
-them, continued in ``s = ln a``. Metric of the arc length: the shape
+:mod:`.epmc_condensed`) as the corrector (:class:`BackboneCorrector`)
+scales them, continued in ``s = ln a``. Metric of the arc length: the shape
 relative to its size, frequency and ``xi`` relative to the linear frequency
 (a change of a third counts as the whole amplitude range), ``ln a``
 relative to the range; the mean position does not count (as
@@ -18,12 +18,206 @@ from typing import Any
 
 import numpy as np
 
-from .epmc import TWO_PI
+from ..errors import InputError, check_choice
+from .epmc import TWO_PI, Epmc
 from .nlmode_branch import POINT_ARRAYS
+from .path.newton import Newton, NewtonTest
 from .path.problem import LostContact, Solution, Stop
 from .path.rows import Rows
 
 log = logging.getLogger("workbench.hbm.nlmodes")
+
+KRYLOV_RTOL = 1e-8  # GMRES: relative residual of each Newton step's linear solve
+KRYLOV_MAX_ITS = 40  # GMRES iterations per linear solve (no restart below that)
+KRYLOV_REBUILD_ITS = 15  # more GMRES iterations than this: refactorise at the next Jacobian
+
+
+class _Shell:
+    """The bordered Jacobian ``[[diag(rs) J diag(s)], [c]]`` as a PETSc shell (``mult``)."""
+
+    def __init__(self, corr: BackboneCorrector):
+        self.corr = corr
+        self.T = None
+
+    def mult(self, mat, x, y) -> None:
+        me = self.corr
+        v = x.getArray(readonly=True)
+        N = me.n - 1
+        u = np.empty(me.n)
+        u[:N] = self.T.matvec(np.concatenate([v[:N] * me.s, v[N:]])) * me.rs
+        u[N] = me.c @ v
+        y.getArray()[:] = u
+
+
+class BackboneCorrector:
+    """Newton (:class:`.path.newton.Newton`, backtracking line search) on the bordered
+    system of a backbone point.
+
+    ``linear``: "dense" (the LU of the Jacobian, PETSc's, rebuilt every ``lag``
+    iterations across solves: a chord method between rebuilds), "krylov"
+    (problems with a ``tangent`` operator, :class:`.epmc_condensed.EpmcCondensed`:
+    GMRES on the exact Jacobian applied without forming it, preconditioned by
+    the dense LU of an earlier Jacobian, refactorised only when GMRES needs more
+    than ``KRYLOV_REBUILD_ITS`` iterations or fails: Newton's convergence at a
+    fraction of the factorisations), "auto" (krylov where the problem has a
+    ``tangent`` operator). A failed solve on a lagged preconditioner is repeated
+    once with a fresh one.
+
+    Unknowns ``Y = [y / scale, s]`` with ``s = ln a``; equations
+    ``[r(y; e^s) * row_scale, c . (Y - Yp)]``: the constraint ``c`` is ``e_s``
+    for a point at a given amplitude, or the secant for a pseudo-arc-length
+    step (which passes a fold of the backbone in amplitude).
+    """
+
+    def __init__(
+        self,
+        prob: Epmc,
+        tol: float,
+        tol_stall: float,
+        max_it: int,
+        line_search: str = "bt",
+        lag: int = 1,
+        linear: str = "auto",
+    ):
+        check_choice("linear", linear, ("auto", "dense", "krylov"))
+        if linear == "auto":
+            linear = "krylov" if hasattr(prob, "tangent") else "dense"
+        elif linear == "krylov" and not hasattr(prob, "tangent"):
+            raise InputError("linear", linear, "dense (this problem has no Jacobian operator)")
+        self.linear = linear
+        self.n_factor = 0  # dense Jacobians formed (and factorised)
+        self.n_krylov = 0  # GMRES iterations in all
+        self.rebuild = True  # the preconditioner is refactorised at the next Jacobian
+        self.prob = prob
+        N = prob.n_unknowns
+        n = self.n = N + 1
+        self.s = prob.var_scale()
+        self.rs = prob.row_scale()
+        self.c = np.zeros(n)
+        self.c[-1] = 1.0
+        self.c0 = 0.0
+        self.shell = _Shell(self) if linear == "krylov" else None
+        self._mats: list = []
+        me = self
+
+        def function(Y: np.ndarray, out: np.ndarray) -> None:
+            # a line-search trial far off (overflow, NaN) is a failed trial, said by inf
+            with np.errstate(over="ignore", invalid="ignore"):
+                r, _ = me.prob.residual(Y[:N] * me.s, float(np.exp(Y[N])))
+            out[:N] = r * me.rs
+            out[N] = me.c @ Y - me.c0
+
+        def on_step() -> None:  # the last step's GMRES: refactorise when it struggled
+            k_its = me.ksp.getIterationNumber()
+            me.n_krylov += k_its
+            if k_its > KRYLOV_REBUILD_ITS or me.ksp.getConvergedReason() < 0:
+                me.rebuild = True
+
+        lagged = lag > 1 and linear == "dense"  # the Jacobian every `lag` iterations
+        self.newton = Newton(
+            n,
+            function,
+            self._linear,
+            NewtonTest(tol, tol_stall, max_it, bordered=True, unscaled=2, give_up_below=None),
+            line_search=line_search,
+            options=(
+                {"snes_lag_jacobian": lag, "snes_lag_jacobian_persists": "true"} if lagged else {}
+            ),
+            step_failures=False,
+            on_step=on_step if linear == "krylov" else None,
+        )
+
+    def _linear(self, snes, ksp) -> None:
+        """The dense LU of the bordered Jacobian, or GMRES preconditioned by a lagged one."""
+        from petsc4py import PETSc
+
+        me, n, N = self, self.n, self.n - 1
+        comm = PETSc.COMM_SELF
+        self.ksp = ksp
+        J = PETSc.Mat().createDense((n, n), comm=comm)
+        J.setUp()
+        self._mats.append(J)
+
+        def bordered(Jd: np.ndarray) -> np.ndarray:
+            """The scaled bordered matrix from the Jacobian (N, N + 1) in [y, ln a]."""
+            Jf = np.empty((n, n))
+            Jf[:N, :N] = (Jd[:, :N] * me.rs[:, None]) * me.s[None, :]
+            Jf[:N, N] = Jd[:, N] * me.rs
+            Jf[N] = me.c
+            return Jf
+
+        def set_dense(P, Jf: np.ndarray) -> None:
+            P.setValues(range(n), range(n), Jf.ravel())  # row-major
+            P.assemble()
+            me.n_factor += 1
+
+        def jacobian(snes, X, A, P):
+            Y = X.getArray(readonly=True)
+            a = float(np.exp(Y[N]))
+            y = Y[:N] * me.s
+            if me.linear == "krylov":
+                _, _, T = me.prob.tangent(y, a)
+                me.shell.T = T
+                if me.rebuild:  # else P (and its LU) stays: the preconditioner is lagged
+                    set_dense(P, bordered(T.dense()))
+                    me.rebuild = False
+                A.assemble()
+                return
+            r0, _, Jd = me.prob.residual(y, a, want_jac=True)
+            h = 1e-6  # d r / d ln a: one more residual (the contact term alone depends on a)
+            r1, _ = me.prob.residual(y, a * np.exp(h))
+            set_dense(P, bordered(np.column_stack([Jd, (r1 - r0) / h])))
+
+        if self.linear == "krylov":
+            A = PETSc.Mat().createPython((n, n), context=self.shell, comm=comm)
+            A.setUp()
+            self._mats.append(A)
+            snes.setJacobian(jacobian, A, J)
+            ksp.setType("gmres")
+            ksp.setGMRESRestart(KRYLOV_MAX_ITS)
+            ksp.setTolerances(rtol=KRYLOV_RTOL, atol=0.0, max_it=KRYLOV_MAX_ITS)
+        else:
+            snes.setJacobian(jacobian, J, J)
+            ksp.setType("preonly")
+        ksp.getPC().setType("lu")
+
+    @property
+    def max_it(self) -> int:
+        return self.newton.max_it
+
+    def set_max_it(self, max_it: int) -> None:
+        """Newton iterations per solve at most (the convergence test's limit)."""
+        self.newton.set_max_it(max_it)
+
+    def scaled(self, y: np.ndarray, s: float) -> np.ndarray:
+        return np.concatenate([y / self.s, [s]])
+
+    def unscaled(self, Y: np.ndarray) -> tuple[np.ndarray, float]:
+        return Y[:-1] * self.s, float(Y[-1])
+
+    def solve(
+        self, Y0: np.ndarray, c: np.ndarray | None = None, Yp: np.ndarray | None = None
+    ) -> tuple[np.ndarray, bool, int]:
+        """From ``Y0`` with the constraint ``c . (Y - Yp) = 0`` (default: ``s = Y0[-1]``)."""
+        if c is None:
+            self.c = np.zeros(self.n)
+            self.c[-1] = 1.0
+            self.c0 = float(Y0[-1])
+        else:
+            self.c = np.asarray(c, float)
+            self.c0 = float(self.c @ (Y0 if Yp is None else Yp))
+        fresh = self.rebuild
+        Y, ok, its = self.newton.run(Y0)[:3]
+        if not ok and self.linear == "krylov" and not fresh:
+            self.rebuild = True  # a lagged preconditioner may have misled it: once more
+            Y, ok, its2 = self.newton.run(Y0)[:3]
+            its += its2
+        if not ok and self.linear == "krylov":
+            self.rebuild = True
+        return Y, ok, its
+
+    def destroy(self) -> None:
+        self.newton.destroy(*self._mats)
 
 
 class Backbone:

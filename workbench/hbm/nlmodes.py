@@ -31,7 +31,7 @@ plus ``K_r psi_0 + W^T (G_0 - f(0)) / a`` for harmonic 0 (``G = f - K_c u``
 as in :mod:`.balance`). The Jacobian is analytic (the AFT's exact
 derivative for the contacts); each point is solved by PETSc SNES (Newton
 with a backtracking line search, a dense LU of the bordered Jacobian, rebuilt
-every third iteration by default: :mod:`.nlmode_corrector`).
+every third iteration by default: :class:`.nlmode_path.BackboneCorrector`).
 
 The point equations live in :mod:`.epmc` (:class:`Epmc` on every DOF,
 :class:`EpmcCondensed` on the contact coordinates); this module chooses the
@@ -58,8 +58,7 @@ from .epmc import TWO_PI, Epmc
 from .epmc_condensed import EpmcCondensed
 from .fourier import Fourier
 from .nlmode_branch import NlModeBranch
-from .nlmode_corrector import Snes
-from .nlmode_path import Backbone
+from .nlmode_path import Backbone, BackboneCorrector
 from .path.engine import NUMERICAL, follow
 from .path.problem import Stop
 from .path.rows import Rows
@@ -207,7 +206,7 @@ def nonlinear_mode(
     contacts, :class:`EpmcCondensed`) solves each Newton step by GMRES on the
     exact Jacobian, preconditioned by the LU of an earlier one (refactorised
     only when GMRES struggles; ``jacobian_lag`` is then unused); "dense" the
-    LU of the Jacobian itself (:mod:`.nlmode_corrector`).
+    LU of the Jacobian itself (:class:`.nlmode_path.BackboneCorrector`).
     Where a point finds the damper out of contact, the step is halved until
     the last point lies within 2 % in amplitude below it. With ``levels``, a point is then solved at
     each level's synthesised peak where the backbone's segment there spans
@@ -234,7 +233,7 @@ def nonlinear_mode(
     check_range("amplitude_range[1]", a1, a0, lo_open=True)
     n_steps = check_int("n_steps", n_steps, 1)
     lag = check_int("jacobian_lag", jacobian_lag, 1)
-    snes = Snes(prob, tol, tol_stall, max_newton, lag=lag, linear=linear)
+    snes = BackboneCorrector(prob, tol, tol_stall, max_newton, lag=lag, linear=linear)
     # chord iterations converge linearly: more of them per point, same step control
     its_scale = 1.0 if lag == 1 or snes.linear == "krylov" else 2.5
     snes.set_max_it(round(max_newton * its_scale))

@@ -82,7 +82,6 @@ class Case:
 
 NLMODE_SOURCES = (
     "nlmodes.py",
-    "nlmode_corrector.py",
     "nlmode_path.py",
     "epmc.py",
     "epmc_condensed.py",
