@@ -22,7 +22,7 @@ Cases (``--cases``, default all):
                against the worst peak error, the ratio at equal accuracy, and the
                chart pyharm_compare.png (benchmarks/pyharm_compare.py)
 
-The rigs are :func:`workbench.hbm.examples.line_damper_rig` (springs and
+The rigs are :func:`workbench.hbm.io.examples.line_damper_rig` (springs and
 lumped masses, dense matrices, six rigid-body modes in K). Every curve
 includes Hill stability at every point and the energy balance.
 
@@ -76,7 +76,7 @@ STABILITY_SHARE = 0.25
 def make_case(name: str):
     """(system, f1, level, band, outputs, harmonics, options) of a benchmark case."""
     from workbench.hbm import SolverOptions
-    from workbench.hbm.examples import line_damper_rig, sdof_jenkins, two_dof_contact
+    from workbench.hbm.io.examples import line_damper_rig, sdof_jenkins, two_dof_contact
 
     if name in ("sdof", "sdof200"):
         ex = sdof_jenkins()
@@ -106,7 +106,7 @@ def warm_up() -> None:
     import scipy.optimize  # noqa: F401  (the peak refinement's, imported at its first use)
 
     from workbench.hbm import SolverOptions, frequency_response
-    from workbench.hbm.examples import sdof_jenkins
+    from workbench.hbm.io.examples import sdof_jenkins
 
     ex = sdof_jenkins()
     for compiled in ("auto", "off"):

@@ -2,14 +2,14 @@
 
 The paper's comparison costs 3 dampers x 2 families x 7 forces = 42 full
 HBM curves. Here each damper and family gets one backbone (extended
-periodic motion concept, :func:`workbench.hbm.nlmodes.nonlinear_mode`) and
+periodic motion concept, :func:`workbench.hbm.nlmodes.backbone.nonlinear_mode`) and
 the 7 forced responses are synthesised from it
-(:func:`workbench.hbm.synthesis.synthesize`); the 42 HBM curves are
+(:func:`workbench.hbm.nlmodes.synthesis.synthesize`); the 42 HBM curves are
 computed as the study computes them (same harmonics, Hill stability on,
 :func:`workbench.hbm.frequency_response`), and the peaks compared.
 
 Model: the synthetic two-blade rig with a free-free damper
-(:func:`workbench.hbm.examples.line_damper_rig`, springs and lumped masses,
+(:func:`workbench.hbm.io.examples.line_damper_rig`, springs and lumped masses,
 the size of the cone model with 23 pairs per line: 363 DOFs), not the FE
 rig; three contact settings stand in for the three dampers (line stiffness
 and friction coefficient), both families, the paper's seven forces.
@@ -62,9 +62,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = ap.parse_args(argv)
     from workbench.hbm import SolverOptions, frequency_response
-    from workbench.hbm.examples import line_damper_rig
-    from workbench.hbm.nlmodes import nonlinear_mode
-    from workbench.hbm.synthesis import synthesize
+    from workbench.hbm.io.examples import line_damper_rig
+    from workbench.hbm.nlmodes.backbone import nonlinear_mode
+    from workbench.hbm.nlmodes.synthesis import synthesize
 
     forces = [float(v) for v in args.forces.split(",")]
     H = tuple(int(v) for v in args.harmonics.split(","))

@@ -42,7 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
-from workbench.hbm.examples import unit_jenkins
+from workbench.hbm.io.examples import unit_jenkins
 
 TWO_PI = 2 * np.pi
 EXAMPLE = unit_jenkins()

@@ -7,7 +7,7 @@ periodic state with a mean offset, one of the many the harmonic balance can
 converge to. This script computes, for one damper on a rig at one force:
 
 1. the harmonic balance curve (``wb.frf``) and its harmonic-1 peak;
-2. a run-up from rest at that peak frequency (:func:`workbench.hbm.runup.runup`,
+2. a run-up from rest at that peak frequency (:func:`workbench.hbm.timedomain.runup.runup`,
    the same contact law, Newmark condensed onto the contact DOFs);
 
 and plots, period by period, the run-up's harmonic-1 amplitude, mean of the
@@ -61,8 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     a = ap.parse_args(argv)
 
     import workbench as wb
-    from workbench.hbm.ports import observation
-    from workbench.hbm.runup import runup
+    from workbench.hbm.core.ports import observation
+    from workbench.hbm.timedomain.runup import runup
 
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -90,8 +90,8 @@ def main(argv: list[str] | None = None) -> int:
     model = prep.assembled
     O = observation(system, model.response_dofs[0:1])
     # the harmonic balance's mean normal load ratio at the peak, from its contact march
-    from workbench.hbm.balance import HarmonicBalance
-    from workbench.hbm.fourier import Fourier
+    from workbench.hbm.core.balance import HarmonicBalance
+    from workbench.hbm.core.fourier import Fourier
 
     hb = HarmonicBalance(system, model.excitation(a.phase), Fourier(b.harmonics, b.nt), O, a.force)
     ev = hb.evaluate(b.x[i], 2 * np.pi * f_pk)

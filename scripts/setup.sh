@@ -67,7 +67,7 @@ PY
 fi
 # the compiled small-system corrector, built ahead of time so that small runs (upd frf) load
 # it without numba; a no-op when it is up to date (a digest of its sources), about 3 min when not
-if ! "$venv/bin/python" -m workbench.hbm.small_aot; then
+if ! "$venv/bin/python" -m workbench.hbm.forced.small_aot; then
     echo "setup: the ahead-of-time kernels were not built; numba compiles them at first use" >&2
 fi
 echo "setup: ready ($venv)" >&2

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from workbench.hbm.branch import Branch
+from workbench.hbm.forced.branch import Branch
 from workbench.post.results import CaseResult, StudyResults
 
 DAMPERS = ("cone", "cylinder", "wedge")

@@ -7,8 +7,8 @@ import pytest
 
 from workbench.contact import ContactElements
 from workbench.errors import InputError
-from workbench.hbm.aft import aft
-from workbench.hbm.fourier import Fourier, default_nt
+from workbench.hbm.core.aft import aft
+from workbench.hbm.core.fourier import Fourier, default_nt
 
 
 def test_synthesis_analysis_round_trip_and_derivative():

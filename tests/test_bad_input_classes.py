@@ -142,7 +142,7 @@ SCIPY_CSR = ["csr index beyond", "csr index negative", "csr indptr falling", "cs
 @pytest.mark.parametrize("defect", SCIPY_CSR)
 def test_a_bad_sparse_matrix_never_reaches_scipy_through_the_api(defect):
     """System (the API's entry) checks a scipy CSR's parts too: a bad one never crashes."""
-    from workbench.hbm.system import System
+    from workbench.hbm.core.system import System
 
     parts = MATRIX_DEFECTS[defect][0]
     K = sp.csr_matrix(K1)
@@ -268,8 +268,8 @@ def test_report_into_a_study_folder_it_cannot_write_is_refused(tmp_path, monkeyp
 @pytest.mark.parametrize("command", ["frf", "nlmodes"])
 def test_a_write_that_fails_after_the_solve_loses_nothing(tmp_path, monkeypatch, command):
     """The disk fills after the check: the results go to a rescue folder, named."""
-    from workbench.hbm.branch import Branch
-    from workbench.hbm.nlmode_branch import NlModeBranch
+    from workbench.hbm.forced.branch import Branch
+    from workbench.hbm.nlmodes.record import NlModeBranch
 
     want = tmp_path / "o"
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
@@ -425,7 +425,7 @@ def test_a_model_file_value_beyond_its_range_is_refused(tmp_path, old, new, para
 
 def test_memory_is_estimated_before_allocating(tmp_path, monkeypatch):
     import workbench.limits
-    from workbench.hbm.fourier import Fourier, memory_estimate
+    from workbench.hbm.core.fourier import Fourier, memory_estimate
 
     assert memory_estimate((0, 1, 2, 3), 1 << 16, 10, 2) > memory_estimate((0, 1, 2, 3), 64, 10, 2)
     monkeypatch.setattr(workbench.limits, "available_memory", lambda: 10_000_000)
@@ -448,7 +448,7 @@ def test_memory_is_estimated_before_allocating(tmp_path, monkeypatch):
 )
 def test_a_positive_lowest_eigenvalue_is_never_called_singular(lam, says, never):
     from workbench.errors import SolveError
-    from workbench.hbm.linear import check_regular
+    from workbench.hbm.core.linear import check_regular
 
     with pytest.raises(SolveError) as e:
         check_regular(np.array(lam))

@@ -17,8 +17,8 @@ from workbench.contact import (
     march_samples,
 )
 from workbench.errors import InputError
-from workbench.hbm.aft import aft, work_per_cycle
-from workbench.hbm.fourier import Fourier
+from workbench.hbm.core.aft import aft, work_per_cycle
+from workbench.hbm.core.fourier import Fourier
 
 
 def loop_law(u, mu, kt1, kt2, kn, n0, law):
@@ -195,7 +195,7 @@ def test_dahl_loop_is_the_analytic_one():
     +-mu N tanh(kt x / mu N) and its area 4 L x - 2 (T_x + L)(L / kt)(1 - exp(-2 kt x / L))
     (L = mu N); the law integrates each step exactly, so only the trapezoid rule on the
     area errs, O(1/nt^2): 1e-5 at nt = 4096."""
-    from workbench.hbm.loops import loop_dissipation
+    from workbench.hbm.core.loops import loop_dissipation
 
     mu, kt, n0, x = 0.5, 1e5, 2.0, 3e-5
     L = mu * n0
@@ -352,7 +352,7 @@ def test_loop_dissipation_is_never_negative_and_matches_the_loop_area():
     and normal motion out of phase) the force jumps to zero; whatever the phase,
     the energy taken by the element over a cycle stays >= 0.
     """
-    from workbench.hbm.loops import loop_dissipation
+    from workbench.hbm.core.loops import loop_dissipation
 
     mu, kt, kn, n0 = 0.5, 1e5, 2e5, 2.0
     el = ContactElements.from_dofs(3, [[0, 1, 2]], mu=mu, kt=kt, kn=kn, n0=n0)

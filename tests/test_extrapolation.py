@@ -78,7 +78,7 @@ def test_round_off_and_too_few_levels():
 def _jenkins_peak(nt: int) -> float:
     """Peak amplitude of the unit Jenkins oscillator (dimensionless), level 0.9, harmonics 0-7."""
     from workbench.hbm import SolverOptions, frequency_response
-    from workbench.hbm.examples import unit_jenkins
+    from workbench.hbm.io.examples import unit_jenkins
 
     ex = unit_jenkins()
     b = frequency_response(

@@ -467,8 +467,8 @@ def test_fidelity_nonlinear_mode_entry(tmp_path):
     error is the synthesised peak against the reference setting's HBM peak (recomputed
     here from the cached backbone), within 2 % where the synthesis calls itself valid,
     and its time is the base model's plus the backbone's."""
-    from workbench.hbm.nlmode_branch import NlModeBranch
-    from workbench.hbm.synthesis import synthesize
+    from workbench.hbm.nlmodes.record import NlModeBranch
+    from workbench.hbm.nlmodes.synthesis import synthesize
     from workbench.studies.fidelity import run_fidelity
     from workbench.studies.spec import load_study
 

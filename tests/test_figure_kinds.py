@@ -16,7 +16,7 @@ import pytest
 
 from tests.conftest import assert_nonblank
 from tests.synthetic import synthetic_study, synthetic_sweep
-from workbench.hbm.examples import sdof_jenkins
+from workbench.hbm.io.examples import sdof_jenkins
 from workbench.post.tables import curve_set
 from workbench.render import curves
 from workbench.render import fidelity_figures as ff

@@ -9,7 +9,7 @@ import pytest
 
 from workbench.errors import InputError
 from workbench.hbm import Branch, curve_distance, frequency_response, load_frf_model
-from workbench.hbm.examples import sdof_jenkins, two_dof_contact, write_example_files
+from workbench.hbm.io.examples import sdof_jenkins, two_dof_contact, write_example_files
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "studies" / "examples"
 

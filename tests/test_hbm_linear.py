@@ -16,8 +16,8 @@ from workbench.hbm import (
     frequency_response,
     modal_damping,
 )
-from workbench.hbm.corrector import Factorization
-from workbench.hbm.examples import sdof_jenkins, two_dof_contact
+from workbench.hbm.forced.corrector import Factorization
+from workbench.hbm.io.examples import sdof_jenkins, two_dof_contact
 
 TWO_PI = 2 * np.pi
 
@@ -135,7 +135,7 @@ def test_recovered_dofs_satisfy_the_full_harmonic_balance(backend):
     f1 = rng.normal(size=sysm.n) + 0j
     hb = HarmonicBalance(sysm, f1 * 5, f, None)
     opts = SolverOptions()
-    from workbench.hbm.corrector import Corrector
+    from workbench.hbm.forced.corrector import Corrector
 
     w = TWO_PI * 55.0
     corr = Corrector(hb, opts, 1e-5, w)
@@ -144,7 +144,7 @@ def test_recovered_dofs_satisfy_the_full_harmonic_balance(backend):
     ev = hb.evaluate(res.x, w)
     Q = hb.response(ev)  # (nh, n)
     U = Q @ sysm.contacts.W.T.toarray()
-    from workbench.hbm.aft import aft
+    from workbench.hbm.core.aft import aft
 
     F = aft(U.reshape(f.nh, sysm.n_el, 3), sysm.contacts, f, False).F.reshape(f.nh, -1)
     C = sysm.C if sysm.C is not None else modal_damping(sysm.M, sysm.K, sysm.zeta, sysm.contacts)

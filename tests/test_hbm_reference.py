@@ -13,8 +13,8 @@ from workbench.hbm import (
     frequency_response,
     time_response,
 )
-from workbench.hbm.corrector import Corrector
-from workbench.hbm.examples import sdof_jenkins, two_dof_contact, unit_jenkins
+from workbench.hbm.forced.corrector import Corrector
+from workbench.hbm.io.examples import sdof_jenkins, two_dof_contact, unit_jenkins
 
 TWO_PI = 2 * np.pi
 
@@ -151,7 +151,7 @@ def test_solver_variants_give_the_same_curve(jenkins, kw):
         ex.system, ex.f1, 1.0, (90, 160), [0], harmonics=(0, 1, 2, 3), options=SolverOptions(**kw)
     )
     assert b.completed, b.message
-    # a Newton variant the compiled path takes (workbench/hbm/small.py) says "compiled"
+    # a Newton variant the compiled path takes (workbench/hbm/forced/small.py) says "compiled"
     newton = "newton" if "line_search" in kw else "compiled"
     assert b.stats["mode"] == (
         "fd" if kw.get("jacobian") == "fd" else kw.get("linear_solver", newton)

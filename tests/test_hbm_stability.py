@@ -14,9 +14,10 @@ from workbench.hbm import (
     frequency_response,
     time_response,
 )
-from workbench.hbm.corrector import Corrector, Factorization
-from workbench.hbm.examples import sdof_jenkins, sdof_unilateral, two_dof_contact, unit_jenkins
-from workbench.hbm.stability import (
+from workbench.hbm.forced.corrector import Corrector, Factorization
+from workbench.hbm.io.examples import sdof_jenkins, sdof_unilateral, two_dof_contact, unit_jenkins
+from workbench.hbm.stability.along_path import HOW_HILL
+from workbench.hbm.stability.hill import (
     CARRIED_STABLE,
     CARRIED_UNSTABLE,
     STABLE,
@@ -25,7 +26,6 @@ from workbench.hbm.stability import (
     hill_dense,
     hill_eig,
 )
-from workbench.hbm.stability_path import HOW_HILL
 
 TWO_PI = 2 * np.pi
 HARM = tuple(range(8))
@@ -297,7 +297,7 @@ def test_a_contested_selection_is_unknown_and_the_orbit_is_indeed_left():
     periods 6-10 (measured), where the kept exponents (real parts -24 1/s and below)
     would have it shrink by exp(-24 * 10 / 94) = 0.08."""
     from workbench.errors import SolveError
-    from workbench.hbm.stability import UNKNOWN
+    from workbench.hbm.stability.hill import UNKNOWN
 
     ex = two_dof_contact(zeta=0.005)
     fq = 94.2859
@@ -335,7 +335,7 @@ def test_a_period_doubling_pair_is_seen_by_the_strip():
     verdict is unknown (the selections disagree), the sparse path's unstable, never
     stable; and a time integration started on the orbit ends on a period-2 orbit."""
     from workbench.errors import SolveError
-    from workbench.hbm.stability import UNKNOWN
+    from workbench.hbm.stability.hill import UNKNOWN
 
     rng = np.random.default_rng(11)
     n = int(rng.choice([3, 4, 6]))  # the draws of the search that found this case, in order
@@ -398,7 +398,7 @@ def test_stability_off_is_unknown_not_stable():
 def test_count_check_flags_an_ambiguous_selection():
     """Two eigenvectors equally centred across the cut (a tie): the count check fails and
     the verdict is unknown, even though every kept exponent is stable."""
-    from workbench.hbm.stability import select_centred
+    from workbench.hbm.stability.hill import select_centred
 
     harmonics = (0, 1)
     # three eigenvectors on (Q0, Qc1, Qs1) of one coordinate: two identical in weight
@@ -422,7 +422,7 @@ def test_contested_only_where_the_ranking_can_reverse_the_verdict():
     """A dropped centred exponent 3 % behind the cut contests a stable kept set when it is
     unstable; it does not contest an unstable set whose unstable exponent is the most
     centred of all (swapping the last kept one cannot remove it)."""
-    from workbench.hbm.stability import contested
+    from workbench.hbm.stability.hill import contested
 
     harmonics, w = (0, 1, 2), 100.0
     far = [0, 0, 0, 1, 1j]  # leaning on harmonic 2: ranked last
@@ -439,7 +439,7 @@ def test_an_empty_selection_gives_no_second_opinion():
     """With harmonics 0-1 every strip exponent leans on the top harmonic and is left out:
     an empty strip must not count as a stable opinion against an unstable kept set (nor an
     empty kept set against the strip)."""
-    from workbench.hbm.stability import second_opinion
+    from workbench.hbm.stability.hill import second_opinion
 
     w, none = 100.0, np.zeros(0, complex)
     assert second_opinion(np.array([2.0 + 10j]), none, w, 1e-6) == ""

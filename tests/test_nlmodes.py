@@ -18,13 +18,13 @@ import pytest
 
 from workbench.contact import ContactElements
 from workbench.hbm import SolverOptions, System, frequency_response
-from workbench.hbm.epmc import Epmc
-from workbench.hbm.epmc_condensed import EpmcCondensed
-from workbench.hbm.examples import sdof_jenkins, two_dof_contact
-from workbench.hbm.fourier import Fourier
-from workbench.hbm.nlmode_branch import NlModeBranch
-from workbench.hbm.nlmodes import nonlinear_mode, pick_mode, slip_amplitude
-from workbench.hbm.synthesis import synthesize
+from workbench.hbm.core.fourier import Fourier
+from workbench.hbm.io.examples import sdof_jenkins, two_dof_contact
+from workbench.hbm.nlmodes.backbone import nonlinear_mode, pick_mode, slip_amplitude
+from workbench.hbm.nlmodes.epmc import Epmc
+from workbench.hbm.nlmodes.epmc_condensed import EpmcCondensed
+from workbench.hbm.nlmodes.record import NlModeBranch
+from workbench.hbm.nlmodes.synthesis import synthesize
 
 
 def jenkins_df(X: np.ndarray, kt: float, fs: float) -> tuple[np.ndarray, np.ndarray]:
@@ -208,9 +208,9 @@ def test_branch_save_load_csv(tmp_path, jenkins):
 def test_condensed_form_matches_all_dofs():
     """The condensed unknowns (contact displacements + the followed mode) give the same
     backbone as the unknowns on every DOF; its Jacobian matches finite differences."""
-    from workbench.hbm.epmc_condensed import EpmcCondensed
-    from workbench.hbm.examples import line_damper_rig
-    from workbench.hbm.nlmodes import pick_mode, slip_amplitude
+    from workbench.hbm.io.examples import line_damper_rig
+    from workbench.hbm.nlmodes.backbone import pick_mode, slip_amplitude
+    from workbench.hbm.nlmodes.epmc_condensed import EpmcCondensed
 
     ex = line_damper_rig(n_per_line=3)
     mode = pick_mode(ex.system, ex.f1, ex.band_hz)
@@ -247,7 +247,7 @@ def test_condensed_form_matches_all_dofs():
 
 def test_plateau_rule():
     """The amplitude-limit rule fires on a flat amplitude with rising damping only."""
-    from workbench.hbm.nlmode_path import plateau
+    from workbench.hbm.nlmodes.problem import plateau
     from workbench.hbm.path.problem import Stop
 
     flat = dict(amplitude=[1.0, 1.0005, 1.001, 1.001, 1.0012, 1.0015], damping_ratio=[])
@@ -268,7 +268,7 @@ def test_chord_and_krylov_newton_land_on_the_same_points():
     default on condensed problems) give the same synthesised peaks (solved points,
     tolerance 1e-10) where valid, the Krylov one with fewer factorisations; a level beyond
     an unfinished backbone's end is flagged with the backbone's reason."""
-    from workbench.hbm.examples import line_damper_rig
+    from workbench.hbm.io.examples import line_damper_rig
 
     ex = line_damper_rig(n_per_line=3, family="out-of-phase", k_line_n_per_m2=5e8, mu=0.5)
     kw = dict(
@@ -300,8 +300,8 @@ def test_condensed_tangent_operator():
     """The condensed problem's Jacobian operator: its products equal the dense matrix, and
     both equal central differences of the residual, the ``ln a`` column included (exact:
     ``d(G/a)/d ln a = D X - G/a``) at a state with stick-slip and partial lift-off."""
-    from workbench.hbm.examples import line_damper_rig
-    from workbench.hbm.nlmodes import pick_mode, slip_amplitude
+    from workbench.hbm.io.examples import line_damper_rig
+    from workbench.hbm.nlmodes.backbone import pick_mode, slip_amplitude
 
     ex = line_damper_rig(n_per_line=3, family="out-of-phase", k_line_n_per_m2=5e8, mu=0.5)
     mode = pick_mode(ex.system, ex.f1, ex.band_hz)
@@ -336,7 +336,7 @@ def test_condensed_tangent_operator():
 def test_stuck_range_is_one_step():
     """Below the first slip every contact sticks: the continuation takes one step from the
     first point to just below the slip amplitude (the mode is linear there)."""
-    from workbench.hbm.nlmodes import slip_amplitude
+    from workbench.hbm.nlmodes.backbone import slip_amplitude
 
     ex = two_dof_contact()
     b = nonlinear_mode(ex.system, f1=ex.f1, band_hz=ex.band_hz, harmonics=(0, 1, 2, 3))
@@ -386,7 +386,7 @@ def test_a_peak_inside_a_coarse_segment_whose_output_bends_is_flagged():
     interpolated peak would be a guess: the synthesis says so and is not valid."""
     import dataclasses
 
-    from workbench.hbm.nlmodes import slip_amplitude
+    from workbench.hbm.nlmodes.backbone import slip_amplitude
 
     ex = sdof_jenkins()
     b = nonlinear_mode(ex.system, f1=ex.f1, harmonics=(0, 1, 3), outputs=ex.outputs)
@@ -413,7 +413,7 @@ def test_a_failed_last_point_never_leaves_the_range_uncovered(monkeypatch):
     """The point exactly at the largest amplitude may fail to converge: the backbone then
     ends at the converged step past it (it still covers the range it claims), never at
     the point before with ``completed`` set as if it had reached the end."""
-    from workbench.hbm.nlmode_path import BackboneCorrector as Snes
+    from workbench.hbm.nlmodes.problem import BackboneCorrector as Snes
 
     ex = sdof_jenkins()
     a_slip = slip_amplitude(ex.system, pick_mode(ex.system, ex.f1))

@@ -28,8 +28,8 @@ import pytest
 
 from workbench.contact import ContactElements
 from workbench.hbm import SolverOptions, System, frequency_response
-from workbench.hbm.examples import line_damper_rig, sdof_jenkins, two_dof_contact, unit_jenkins
-from workbench.hbm.nlmodes import nonlinear_mode
+from workbench.hbm.io.examples import line_damper_rig, sdof_jenkins, two_dof_contact, unit_jenkins
+from workbench.hbm.nlmodes.backbone import nonlinear_mode
 
 DATA = Path(__file__).parent / "data" / "path_pinned.npz"
 

@@ -71,7 +71,7 @@ def _prepared(case, contact_params):
 
 
 def _study(tmp_path: Path, geo: Path):
-    from workbench.hbm.options import SolverOptions
+    from workbench.hbm.core.options import SolverOptions
     from workbench.pipeline import contact_params_for
     from workbench.post.provenance import solve_inputs
     from workbench.post.results import StudyResults

@@ -72,7 +72,7 @@ def test_the_figures_read_the_palette():
 
 
 def test_carried_verdicts_are_shown_as_carried(unknowns):
-    """Verdicts carried from checked neighbours (codes 2 and 3, workbench.hbm.stability_path)
+    """Verdicts carried from checked neighbours (codes 2 and 3, workbench.hbm.stability.along_path)
     reach the legends, the captions and the tables under their own name, never as plain
     stable or unstable: each is one row of VERDICTS."""
     from workbench.post.answer import cases_table

@@ -1,7 +1,7 @@
 """Robustness study: methods x cases on small models, the failure map, resume, bad input.
 
 The rig cases of studies/robustness.toml need meshes and reductions, so the
-default tests use the small documented models of workbench.hbm.examples; the
+default tests use the small documented models of workbench.hbm.io.examples; the
 end-to-end run on a rig case is marked slow.
 """
 
@@ -17,7 +17,7 @@ from conftest import assert_nonblank, run_upd
 
 from workbench.errors import InputError, SolveError
 from workbench.hard_cases import CASES, METHODS
-from workbench.hbm.examples import sdof_jenkins, sdof_unilateral
+from workbench.hbm.io.examples import sdof_jenkins, sdof_unilateral
 from workbench.studies import robustness as rb
 from workbench.studies.robustness_cells import ENERGY_TOL, Problem, classify, method_options
 from workbench.studies.robustness_time import (
@@ -276,10 +276,10 @@ def test_every_accepted_point_is_a_solution(method, model):
     # corrector must not accept such a point (with the cp line search it did: residuals up to
     # 4e-8 relative on the Jenkins oscillator, 0.19 on the light-damping rig case). Each
     # point's residual is computed here, independently of the corrector.
-    from workbench.hbm.balance import HarmonicBalance
-    from workbench.hbm.continuation import frequency_response
-    from workbench.hbm.examples import two_dof_contact
-    from workbench.hbm.fourier import Fourier
+    from workbench.hbm.core.balance import HarmonicBalance
+    from workbench.hbm.core.fourier import Fourier
+    from workbench.hbm.forced.response import frequency_response
+    from workbench.hbm.io.examples import two_dof_contact
 
     ex, level, harm = (
         (sdof_jenkins(), 1.0, (0, 1, 2, 3))

@@ -1,7 +1,7 @@
-"""The run-up integrator (workbench.hbm.runup) against the dense time-integration reference.
+"""The run-up integrator (workbench.hbm.timedomain.runup) against the dense reference.
 
 The condensed Newmark step (contact DOFs by Woodbury) is the same scheme as
-workbench.hbm.timeint, so from the same rest state and step size both must
+workbench.hbm.timedomain.timeint, so from the same rest state and step size both must
 reach the same periodic response: on the two-DOF 3-D contact example (normal
 load variation and partial separation) the harmonic-1 amplitudes agree to the
 Newton tolerances, not to a discretisation error. A continued run equals an
@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from workbench.errors import InputError
-from workbench.hbm.examples import two_dof_contact
-from workbench.hbm.fourier import Fourier
-from workbench.hbm.runup import runup
-from workbench.hbm.timeint import time_response
+from workbench.hbm.core.fourier import Fourier
+from workbench.hbm.io.examples import two_dof_contact
+from workbench.hbm.timedomain.runup import runup
+from workbench.hbm.timedomain.timeint import time_response
 
 
 @pytest.fixture(scope="module")

@@ -118,8 +118,8 @@ def test_single_mode_rule_against_the_harmonic_balance_of_a_jenkins_oscillator()
     at 80 F_slip = 1.26 F_cap): the screen's docs call it a lower bound
     there, and this test asserts that it is one.
     """
-    from workbench.hbm.continuation import frequency_response
-    from workbench.hbm.examples import sdof_jenkins
+    from workbench.hbm.forced.response import frequency_response
+    from workbench.hbm.io.examples import sdof_jenkins
 
     ex = sdof_jenkins(m=0.1, f_free_hz=100.0, kt_ratio=1.0, mu=0.5, n0=2.0, zeta=0.005)
     s = ex.system

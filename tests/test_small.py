@@ -1,7 +1,7 @@
 """The compiled small-system corrector takes the same steps as the PETSc SNES corrector.
 
 Both solve the same harmonic balance with the same Newton iterations, line
-search and convergence test (workbench.hbm.small_kernels), so a branch
+search and convergence test (workbench.hbm.forced.small_kernels), so a branch
 computed with either has the same points, the same Newton iteration counts
 and the same solutions to round-off. Tolerances: the two paths factor the
 Jacobian differently (the compiled path a full dense LU, the PETSc path a
@@ -24,8 +24,8 @@ from workbench.hbm import (
     System,
     frequency_response,
 )
-from workbench.hbm.examples import sdof_jenkins, two_dof_contact, unit_jenkins
-from workbench.hbm.small import SmallCorrector, eligible
+from workbench.hbm.forced.small import SmallCorrector, eligible
+from workbench.hbm.io.examples import sdof_jenkins, two_dof_contact, unit_jenkins
 
 TWO_PI = 2 * np.pi
 
@@ -126,7 +126,7 @@ def test_who_takes_the_compiled_path():
 def test_the_just_in_time_kernels_are_the_ahead_of_time_ones(monkeypatch):
     """The JIT fallback (kernels edited since the module was built) gives the same branch as
     the ahead-of-time module, when there is one (else it is what the other tests ran)."""
-    from workbench.hbm import small, small_aot
+    from workbench.hbm.forced import small, small_aot
 
     ex = two_dof_contact()
     run = dict(harmonics=tuple(range(6)), nt=128)

@@ -1,5 +1,5 @@
 """Hill's verdicts along a branch: checked where they can change, carried between, never
-claimed where they were not established (workbench.hbm.stability_path)."""
+claimed where they were not established (workbench.hbm.stability.along_path)."""
 
 from __future__ import annotations
 
@@ -9,21 +9,21 @@ import numpy as np
 import pytest
 
 from workbench.hbm import SolverOptions, frequency_response
-from workbench.hbm.examples import sdof_jenkins, sdof_unilateral, two_dof_contact
-from workbench.hbm.stability import (
+from workbench.hbm.io.examples import sdof_jenkins, sdof_unilateral, two_dof_contact
+from workbench.hbm.stability.along_path import (
+    HOW_CARRIED,
+    HOW_HILL,
+    HOW_LINEAR,
+    PENDING,
+    StabilityPath,
+)
+from workbench.hbm.stability.hill import (
     CARRIED_STABLE,
     CARRIED_UNSTABLE,
     STABLE,
     UNKNOWN,
     UNSTABLE,
     Stability,
-)
-from workbench.hbm.stability_path import (
-    HOW_CARRIED,
-    HOW_HILL,
-    HOW_LINEAR,
-    PENDING,
-    StabilityPath,
 )
 
 TWO_PI = 2 * np.pi

@@ -394,7 +394,7 @@ def test_image_regression_catches_a_visible_change(tmp_path):
 
 def test_a_branch_that_failed_at_its_first_point(tmp_path):
     """No point at all: every figure still draws, the captions and the tables say so."""
-    from workbench.hbm.branch import _ARRAYS
+    from workbench.hbm.forced.branch import _ARRAYS
 
     r = synthetic_study(dampers=("cone", "wedge"), phases=(0.0,), forces=(9.6, 30.0))
     dead = r.select(damper="wedge", force_n=30.0)[0]

@@ -99,7 +99,7 @@ def test_case_peak_file(tmp_path):
 def test_peak_relative_motion_matches_the_branch_output():
     """The recovered harmonic-1 contact motion at the peak is the branch's own output there."""
     from workbench.hbm import frequency_response
-    from workbench.hbm.examples import two_dof_contact
+    from workbench.hbm.io.examples import two_dof_contact
 
     ex = two_dof_contact()
     b = frequency_response(ex.system, ex.f1, 1.0, ex.band_hz, ex.outputs)

@@ -204,7 +204,7 @@ def load_results(path: str | Path):
 
 def frf_model(path: str | Path):
     """A ``upd frf`` model TOML (matrices from any FE code) as an FrfModel."""
-    from .hbm.modelfile import load_frf_model
+    from .hbm.io.modelfile import load_frf_model
 
     return load_frf_model(path)
 

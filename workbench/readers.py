@@ -4,7 +4,7 @@ One entry point, :func:`read_matrices`, returns a :class:`MatrixSet`: the
 matrices by name and, when the file says so, the label of every row as a
 ``(node id, component)`` pair (components 1-6: x, y, z, rx, ry, rz in the
 node's output frame). The labels let a model file name contact pairs by
-node id instead of DOF indices (``workbench.hbm.modelfile``).
+node id instead of DOF indices (``workbench.hbm.io.modelfile``).
 
 =====================================  ==========================  ==========
 format (suffix)                        read with                   labels

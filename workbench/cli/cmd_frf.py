@@ -202,7 +202,7 @@ def _curve_files(b, i: int, level: float, model, out: Path, figures: bool = True
 
 def _load(path: Path, over: dict, load_frf_model):
     """The model file with the command line's values; every check is the model file's
-    (workbench/hbm/modelfile.py, modelcheck.py), errors name the option typed."""
+    (workbench/hbm/io/modelfile.py, modelcheck.py), errors name the option typed."""
     return load_frf_model(path, over, names=OVERRIDE_NAMES)
 
 

@@ -143,8 +143,8 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
 def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..errors import SolveError, check_int
     from ..hbm import frequency_response, load_frf_model
-    from ..hbm.nlmodes import nonlinear_mode
-    from ..hbm.synthesis import synthesize
+    from ..hbm.nlmodes.backbone import nonlinear_mode
+    from ..hbm.nlmodes.synthesis import synthesize
     from ..io import write_json
     from ..render.nlmode_figures import plot_backbones, plot_synthesis
     from ..studies.spec import check_option

@@ -56,7 +56,7 @@ def aft_march(
     """March the law (name, or its index in ``LAWS``) until the loop repeats; see :func:`march`.
 
     ``u`` (n_el, nt, 3) in metres; ``E`` (nt, nh) synthesis, ``P`` (nh, nt)
-    analysis (:mod:`workbench.hbm.fourier`). Returns ``f`` (n_el, nt, 3, N),
+    analysis (:mod:`workbench.hbm.core.fourier`). Returns ``f`` (n_el, nt, 3, N),
     ``F`` (n_el, 3, nh), ``J`` (n_el, 3, nh, 3, nh, N/m) or None, ``n_slip``,
     ``n_sep``, ``contact`` and ``periods`` (periods marched per element).
     """

@@ -201,7 +201,7 @@ def march(
     """March ``law`` over periods of samples ``u`` (n_el, nt, 3) in metres until it repeats.
 
     ``E`` (nt, nh) synthesises the samples from harmonics, ``P`` (nh, nt)
-    analyses them (see :mod:`workbench.hbm.fourier`). Returns a dict with
+    analyses them (see :mod:`workbench.hbm.core.fourier`). Returns a dict with
 
     * ``f`` (n_el, nt, 3): force samples ``[T1, T2, -N]`` (N) of the last period;
     * ``F`` (n_el, 3, nh): their harmonics ``P @ f``;

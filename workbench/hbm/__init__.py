@@ -46,23 +46,25 @@ law) at chosen frequencies; :func:`curve_distance` compares curves by
 nearest point in normalised arc length; :func:`load_frf_model` reads the
 TOML input of ``upd frf``.
 
-Fourier layout: :mod:`workbench.hbm.fourier` (the one place that defines
-it). Modules: ``fourier`` (layout, matrices), ``aft`` (alternating
-frequency/time), ``system`` (the record, modal damping), ``linear``
-(receptances), ``balance`` (residual, Jacobian, recovery, energies),
-``corrector`` (PETSc SNES), ``continuation`` (the loop), ``stability``
-(Hill), ``branch`` (the result), ``timeint`` (the reference),
-``modelfile`` (TOML input), ``examples`` (small models).
+Fourier layout: :mod:`workbench.hbm.core.fourier` (the one place that defines
+it). Sub-packages: ``core`` (Fourier layout, AFT, the system record, linear
+receptances, the balance's residual, Jacobian, recovery and energies,
+options), ``path`` (the one path-following engine: protocol, step rule,
+loop, Newton), ``forced`` (the forced response, its correctors, peaks, the
+Branch record), ``stability`` (Hill's method, verdicts along a branch),
+``nlmodes`` (backbones of nonlinear modes, synthesis), ``timedomain`` (the
+time-integration references), ``io`` (the model file, examples, the HDF5
+record writer).
 """
 
-from .balance import HarmonicBalance
-from .branch import Branch, curve_distance
-from .continuation import frequency_response
-from .fourier import Fourier
-from .modelfile import FrfModel, load_frf_model
-from .options import SolverOptions
-from .system import System, modal_damping
-from .timeint import TimeResponse, time_response
+from .core.balance import HarmonicBalance
+from .core.fourier import Fourier
+from .core.options import SolverOptions
+from .core.system import System, modal_damping
+from .forced.branch import Branch, curve_distance
+from .forced.response import frequency_response
+from .io.modelfile import FrfModel, load_frf_model
+from .timedomain.timeint import TimeResponse, time_response
 
 __all__ = [
     "Branch",

@@ -69,7 +69,7 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
     from ..assembly.model import assemble
     from ..contact.elements import ContactElements
     from ..fe.reduce import model_path, reduce_body
-    from ..hbm.system import System
+    from ..hbm.core.system import System
     from ..log import stage
 
     timings: dict[str, float] = {}
@@ -171,8 +171,8 @@ def band_for(prep: PreparedModel, case: Case) -> tuple[float, float]:
 
 def solve_case(prep: PreparedModel, case: Case) -> CaseResult:
     """The frequency response of one case (never raises for a failed solve)."""
-    from ..hbm.continuation import frequency_response
-    from ..hbm.options import SolverOptions
+    from ..hbm.core.options import SolverOptions
+    from ..hbm.forced.response import frequency_response
     from ..post.provenance import solve_inputs  # the inputs, read from the objects used
 
     s = case.settings

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..hbm.stability_path import HOW_CARRIED, HOW_HILL, HOW_LINEAR
+from ..hbm.stability.along_path import HOW_CARRIED, HOW_HILL, HOW_LINEAR
 from .results import CaseResult, StudyResults, family_name
 from .tables import (
     Table,
@@ -147,7 +147,7 @@ def confidence(results: StudyResults, rows: dict[float, list[AnswerRow]]) -> lis
         else np.zeros(0, int)
     )
     n_hill, n_lin, n_car = (int(np.sum(hows == k)) for k in (HOW_HILL, HOW_LINEAR, HOW_CARRIED))
-    if n_lin or n_car:  # how each verdict was obtained (workbench/hbm/stability_path.py)
+    if n_lin or n_car:  # how each verdict was obtained (workbench/hbm/stability/along_path.py)
         sentence += (
             f" (Hill's method at {n_hill} points; {n_lin} with every contact stuck take the "
             f"linear system's verdict; {n_car} carry the verdict of the checked points around "

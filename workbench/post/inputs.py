@@ -181,7 +181,7 @@ def used_inputs(
         elif v is None and (name == "mesh-size" or name in shape_options):
             v, src = _geometry_default(name, dampers, geo_file)
         elif v is None and name == "nt":
-            from ..hbm.fourier import default_nt
+            from ..hbm.core.fourier import default_nt
 
             v = default_nt(tuple(values.get("harmonics") or (1,)))
             src = "solver default (16 x the highest harmonic, at least 32)"

@@ -158,8 +158,8 @@ def solve_inputs(prep: Any, settings: Mapping[str, Any], branch: Any, options: A
 
     ``prep``: the runner's prepared model (``contact_params``, ``geometry``,
     ``assembled``, ``system``); ``settings``: the case's study options;
-    ``branch``: the computed :class:`~workbench.hbm.branch.Branch`;
-    ``options``: the :class:`~workbench.hbm.options.SolverOptions` used.
+    ``branch``: the computed :class:`~workbench.hbm.forced.branch.Branch`;
+    ``options``: the :class:`~workbench.hbm.core.options.SolverOptions` used.
     """
     import dataclasses
 
@@ -289,7 +289,9 @@ def solve_inputs(prep: Any, settings: Mapping[str, Any], branch: Any, options: A
         kind_text = "a viscous matrix C given with the model"
     else:
         kind_text = "none (friction only)"
-    out["damping_kind"] = _e(kind_text, "", "workbench/hbm/system.py", "kind of damping", "damping")
+    out["damping_kind"] = _e(
+        kind_text, "", "workbench/hbm/core/system.py", "kind of damping", "damping"
+    )
     # the harmonic balance
     out["harmonics"] = _e(
         [int(h) for h in branch.harmonics],
@@ -330,7 +332,7 @@ def solve_inputs(prep: Any, settings: Mapping[str, Any], branch: Any, options: A
         json.dumps(opts, sort_keys=True, default=str),
         "",
         "option (max-points, stability); the rest SolverOptions defaults",
-        "continuation and corrector settings (workbench/hbm/options.py)",
+        "continuation and corrector settings (workbench/hbm/core/options.py)",
         "solve",
     )
     # the code

@@ -2,7 +2,7 @@
 
 A *case* is one damper, one inter-blade phase angle, one excitation level
 and one set of modelling knobs (its ``variant`` label; "" for the study's
-base settings). Its :class:`~workbench.hbm.branch.Branch` holds the curve
+base settings). Its :class:`~workbench.hbm.forced.branch.Branch` holds the curve
 (frequency, response amplitude, stability, contact status and friction
 energy of every pair at every point).
 
@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..hbm.branch import Branch
+from ..hbm.forced.branch import Branch
 from ..io import atomic_path
 
 STATUS_NAMES = ("stuck", "stick-slip", "partial separation", "full separation")

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-# Branch datasets (workbench.hbm.branch); "L" is the model's length unit
+# Branch datasets (workbench.hbm.forced.branch); "L" is the model's length unit
 BRANCH_UNITS: dict[str, tuple[str, str]] = {
     "freq_hz": ("Hz", "excitation frequency of each point, in continuation order"),
     "stable": ("1", "True only for an established stable verdict (Hill or linear)"),
@@ -30,13 +30,13 @@ BRANCH_UNITS: dict[str, tuple[str, str]] = {
     "energy_residual": ("1", "relative energy balance residual per cycle"),
     "out_amp": ("L", "largest |y(t)| over the period, per output"),
     "out_h1": ("L", "harmonic-1 amplitude per output"),
-    "out_harm": ("L", "output harmonics (nh, n_out), Fourier layout of hbm/fourier.py"),
+    "out_harm": ("L", "output harmonics (nh, n_out), Fourier layout of hbm/core/fourier.py"),
     "status": (
         "1",
         "contact status per pair: 0 stuck, 1 stick-slip, 2 partial separation, 3 full separation",
     ),
     "friction_energy": ("J", "friction energy dissipated per cycle, per pair"),
-    "x": ("L", "solved harmonic unknowns (layout of hbm/balance.py)"),
+    "x": ("L", "solved harmonic unknowns (layout of hbm/core/balance.py)"),
     "work_ext": ("J", "work of the excitation per cycle"),
     "work_visc": ("J", "viscous dissipation per cycle"),
     "work_friction": ("J", "tangential contact work per cycle"),

@@ -172,13 +172,13 @@ def peak_relative_motion(case, system) -> np.ndarray | None:
     """(n_pairs, 3) complex harmonic-1 relative displacement (pair frame t1, t2, n), m.
 
     Read from the solved unknowns at the peak (``Branch.x``, the layout of
-    :mod:`workbench.hbm.balance`): in the "condensed" space they are the
+    :mod:`workbench.hbm.core.balance`): in the "condensed" space they are the
     harmonics of the active relative contact DOFs themselves (the non-zero
     rows of the contacts' ``W``), in the "physical" space those of every
     coordinate, mapped by ``W``. No solve is repeated. None when the branch
     has no point.
     """
-    from ..hbm.fourier import Fourier
+    from ..hbm.core.fourier import Fourier
 
     b = case.branch
     i = case.peak_index

@@ -41,7 +41,7 @@ def plot_backbones(
 ) -> Path:
     """Frequency, damping ratio, friction energy and contact status against the amplitude.
 
-    ``backbones``: (label, :class:`workbench.hbm.nlmode_branch.NlModeBranch`) pairs.
+    ``backbones``: (label, :class:`workbench.hbm.nlmodes.record.NlModeBranch`) pairs.
     The horizontal axis is the amplitude of output ``output`` (times
     ``unit_scale``, in ``unit``), logarithmic. The status panel shows the
     share of contact elements in each status for the first backbone.
@@ -113,7 +113,7 @@ def plot_synthesis(
 
     ``level_unit``: the excitation level's unit in the legend (e.g. "N").
 
-    ``syntheses``: :class:`workbench.hbm.synthesis.Synthesis` records;
+    ``syntheses``: :class:`workbench.hbm.nlmodes.synthesis.Synthesis` records;
     ``hbm``: the HBM branches of the same levels (or None); an invalid
     synthesis is drawn dotted and its peak as an open circle.
     """

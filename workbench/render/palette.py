@@ -17,7 +17,7 @@ here, so a colour means one thing in every figure of every report:
   damper uses, their lightness rising in that order, so a greyscale print
   keeps the order.
 * **a stability verdict** (:data:`VERDICTS`): one row per code of a
-  branch's ``stability`` array (:mod:`workbench.hbm.stability`: 1 stable,
+  branch's ``stability`` array (:mod:`workbench.hbm.stability.hill`: 1 stable,
   0 unstable, -1 unknown, 2 and 3 stable and unstable carried from checked
   neighbours) with its word, its line style where colour names
   the force, its band where line style names the damper, and the fill of
@@ -150,7 +150,7 @@ VERDICTS: tuple[Verdict, ...] = (
         words="dotted",
         band_words="on a beaded grey band",
     ),
-    # carried from checked neighbours (workbench.hbm.stability_path): not established at
+    # carried from checked neighbours (workbench.hbm.stability.along_path): not established at
     # the point, drawn as their verdict with a break in the line
     Verdict(
         2,

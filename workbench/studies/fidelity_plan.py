@@ -20,7 +20,7 @@ from .spec import StudySpec, parse_harmonics
 def base_values(spec: StudySpec, damper: str) -> dict[str, Any]:
     """The base setting's knob values, with 'file default' (None) resolved to numbers."""
     from ..geometry import load_geometry_params
-    from ..hbm.fourier import default_nt
+    from ..hbm.core.fourier import default_nt
 
     v = {
         "mesh-size": spec.mesh_size,

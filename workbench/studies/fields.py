@@ -32,9 +32,9 @@ log = logging.getLogger(__name__)
 
 def peak_coordinates(case, prep) -> tuple[np.ndarray, dict[str, int]]:
     """(nh, n) harmonics of the generalised coordinates at the case's peak, and row indices."""
-    from ..hbm.balance import HarmonicBalance
-    from ..hbm.fourier import Fourier
-    from ..hbm.options import SolverOptions
+    from ..hbm.core.balance import HarmonicBalance
+    from ..hbm.core.fourier import Fourier
+    from ..hbm.core.options import SolverOptions
 
     b, i = case.branch, case.peak_index
     opts = SolverOptions()

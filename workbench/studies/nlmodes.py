@@ -3,7 +3,7 @@ responses synthesised from it at every force, and their check against the full H
 
 For every model of a study (damper x swept value) and every phase (family),
 :func:`study_backbones` follows the stuck mode that the family's excitation
-drives most in its band (:func:`workbench.hbm.nlmodes.pick_mode`) with the
+drives most in its band (:func:`workbench.hbm.nlmodes.backbone.pick_mode`) with the
 extended periodic motion concept, on the same reduced model, contact law,
 harmonics and AFT samples as the study's cases. Each backbone is cached in
 ``out/cache/nlmodes/<key>.h5`` (with the excitation in ``<key>.npz``), so a
@@ -74,7 +74,7 @@ def family_backbone(
     forces=None,
 ):
     """The backbone of ``case``'s family on a prepared model, with its excitation and band."""
-    from ..hbm.nlmodes import nonlinear_mode, pick_mode
+    from ..hbm.nlmodes.backbone import nonlinear_mode, pick_mode
     from ..pipeline import band_for
 
     s = case.settings
@@ -120,8 +120,8 @@ def study_backbones(
     not in ``prepared`` are prepared from the study's FE cache. Rank 0 only
     under MPI (the others return empty results).
     """
-    from ..hbm.nlmode_branch import NlModeBranch
-    from ..hbm.synthesis import synthesize
+    from ..hbm.nlmodes.record import NlModeBranch
+    from ..hbm.nlmodes.synthesis import synthesize
     from ..pipeline import prepare_model
     from ..post.results import CaseResult, family_name
 
@@ -291,7 +291,7 @@ def cost_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
 
 def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
     """Report sections for the backbones and the synthesis check (figures, tables, text)."""
-    from ..hbm.nlmode_branch import NlModeBranch
+    from ..hbm.nlmodes.record import NlModeBranch
     from ..post.results import CaseResult
     from ..post.tables import write_rows_csv
     from ..render.nlmode_figures import plot_backbones, plot_synthesis, plot_synthesis_errors
@@ -389,7 +389,7 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
     for b in res["backbones"]:
         rs = [r for r in rows if r["label"] == b["label"]]
         nm = bbs[b["label"]]
-        from ..hbm.synthesis import synthesize
+        from ..hbm.nlmodes.synthesis import synthesize
 
         with np.load(out / b["file"].replace(".h5", ".npz")) as z:
             f1, band = z["f1"], tuple(float(v) for v in z["band"])
@@ -494,8 +494,8 @@ def fidelity_entry(comp, base, ref, out: str | Path):
     flags itself not valid keeps its errors (the chart shows what it costs
     to trust it anyway) and says so in ``failed``-free ``members``.
     """
-    from ..hbm.nlmode_branch import NlModeBranch
-    from ..hbm.synthesis import synthesize
+    from ..hbm.nlmodes.record import NlModeBranch
+    from ..hbm.nlmodes.synthesis import synthesize
     from ..pipeline import prepare_model
     from ..post.fidelity import QUANTITIES, Setting, condition_name
 

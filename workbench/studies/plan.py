@@ -80,14 +80,8 @@ class Case:
         }
 
 
-NLMODE_SOURCES = (
-    "nlmodes.py",
-    "nlmode_path.py",
-    "epmc.py",
-    "epmc_condensed.py",
-    "nlmode_branch.py",
-    "synthesis.py",
-)
+# the nonlinear modes (hbm/nlmodes/, every file under it) do not shape a forced response
+NLMODE_PACKAGE = "nlmodes"
 
 
 def solver_code_version() -> str:
@@ -102,12 +96,12 @@ def solver_code_version() -> str:
 
     root = Path(__file__).resolve().parents[1]
     parts = [code_version(root / pkg) for pkg in ("contact", "assembly")]
-    # the nonlinear modes (NLMODE_SOURCES) do not shape a forced response
+    # the nonlinear modes (hbm/NLMODE_PACKAGE/) do not shape a forced response
     hbm_dir = root / "hbm"
     hbm = tuple(
         str(p.relative_to(hbm_dir))
         for p in sorted(hbm_dir.rglob("*.py"))
-        if p.name not in NLMODE_SOURCES
+        if p.relative_to(hbm_dir).parts[0] != NLMODE_PACKAGE
     )
     parts.insert(1, code_version(hbm_dir, hbm))
     parts.append(code_version(root / "studies", ("plan.py", "runner.py")))

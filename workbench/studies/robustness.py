@@ -1,6 +1,6 @@
 """Robustness study: solution methods crossed with hard cases, a map of success and failure.
 
-A *method* is a named variant of :class:`~workbench.hbm.options.SolverOptions`
+A *method* is a named variant of :class:`~workbench.hbm.core.options.SolverOptions`
 (:data:`METHODS`, named in :mod:`workbench.study_options`; the first method
 of a study is the reference, normally
 ``default``: the options every other study uses). A *hard case* is one
@@ -8,7 +8,7 @@ frequency response of the assembled rig + damper model that stresses the
 solver (:data:`CASES`: preload near separation, a high ``kt / (mu N0)``
 ratio, a high force, the wedge in phase with separation, a folding branch,
 very light damping). Each (method, case) *cell* is one
-:func:`~workbench.hbm.continuation.frequency_response`; its outcome is
+:func:`~workbench.hbm.forced.response.frequency_response`; its outcome is
 
 * ``ok``: the branch reached the band end and its peak amplitude is within
   ``peak-tolerance`` percent of the reference method's (the peak frequency's
@@ -28,9 +28,9 @@ includes the solver sources, and the method's options) in
 recomputes. Then, where the harmonic balance is suspect (turning points,
 separation, Hill-unstable points, the lightest damping), its periodic
 solution is compared with a time integration started on it
-(:mod:`workbench.hbm.timeint`, dense, at most 200 DOFs: so on the small
+(:mod:`workbench.hbm.timedomain.timeint`, dense, at most 200 DOFs: so on the small
 models of :data:`TIME_MODELS`, not on the rig models of 300-900 DOFs; the
-78-DOF synthetic line-damper rig of :mod:`workbench.hbm.examples` fits, but
+78-DOF synthetic line-damper rig of :mod:`workbench.hbm.io.examples` fits, but
 with light damping its time integration does not become periodic within a
 few hundred periods, minutes each, so it is not part of the check). That
 check lives in :mod:`.robustness_time`, a cell's solve and verdict in

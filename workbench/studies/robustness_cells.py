@@ -60,7 +60,7 @@ class Problem:
 
 def method_options(name: str, base: dict[str, Any] | None = None):
     """The SolverOptions of method ``name`` (over the ``base`` fields)."""
-    from ..hbm.options import SolverOptions
+    from ..hbm.core.options import SolverOptions
 
     if name not in METHODS:
         raise InputError("methods", name, "one of " + ", ".join(METHODS))
@@ -84,7 +84,7 @@ def _cell_key(problem: Problem, method: str) -> str:
 
 def run_cell(problem: Problem, method: str) -> dict[str, Any]:
     """Solve ``problem`` with ``method``; never raises for a failed solve."""
-    from ..hbm.continuation import frequency_response
+    from ..hbm.forced.response import frequency_response
 
     opts = method_options(method, problem.base_options)
     system, f1, band, outputs, names = problem.get()

@@ -1,7 +1,7 @@
 """The robustness study's check of the harmonic balance against time integration.
 
 On small models (:data:`TIME_MODELS`, at most 200 DOFs: the dense time
-integration of :mod:`workbench.hbm.timeint`), the HBM branch is computed
+integration of :mod:`workbench.hbm.timedomain.timeint`), the HBM branch is computed
 and, at its suspect points (peak, turning points, a Hill-unstable and a
 separated point), a time integration is started on the HBM orbit and its
 steady amplitude compared with the branch's (cached per model).
@@ -50,13 +50,13 @@ class TimeModel:
 
 
 def _two_dof():
-    from ..hbm.examples import two_dof_contact
+    from ..hbm.io.examples import two_dof_contact
 
     return two_dof_contact(zeta=0.005)
 
 
 def _sdof_light():
-    from ..hbm.examples import sdof_jenkins
+    from ..hbm.io.examples import sdof_jenkins
 
     return sdof_jenkins(zeta=1e-4)
 
@@ -107,11 +107,11 @@ def suspect_points(freq_hz, amp, stability, status, max_points: int = 4) -> list
 
 def time_check(name: str, tm: TimeModel) -> dict[str, Any]:
     """HBM branch of a small model and time integrations started on it at its suspect points."""
-    from ..hbm.balance import HarmonicBalance
-    from ..hbm.continuation import frequency_response
-    from ..hbm.fourier import Fourier
-    from ..hbm.options import SolverOptions
-    from ..hbm.timeint import time_response
+    from ..hbm.core.balance import HarmonicBalance
+    from ..hbm.core.fourier import Fourier
+    from ..hbm.core.options import SolverOptions
+    from ..hbm.forced.response import frequency_response
+    from ..hbm.timedomain.timeint import time_response
 
     ex = tm.build()
     # Hill's method at every point: the time integrations check its verdicts themselves

@@ -152,7 +152,7 @@ def prepare_sample(base_prep, case: Case, tilt_deg: float):
     """
     from ..assembly.model import preloads
     from ..contact.elements import ContactElements
-    from ..hbm.system import System
+    from ..hbm.core.system import System
     from ..pipeline import PreparedModel, contact_params_for
     from .imperfection import open_share, tilted_preloads
 

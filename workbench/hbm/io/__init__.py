@@ -1,1 +1,3 @@
-"""Reading and writing hbm's records (the HDF5 layout of a branch or backbone)."""
+"""Model input and records: the TOML model of ``upd frf`` (:mod:`.modelfile`,
+:mod:`.modelcheck`), small example models (:mod:`.examples`) and the HDF5 writer of
+every branch and backbone (:mod:`.record`)."""

@@ -1,7 +1,7 @@
 """One HDF5 writer and reader for the records of a followed path.
 
-A forced response (:class:`workbench.hbm.branch.Branch`) and a backbone
-(:class:`workbench.hbm.nlmode_branch.NlModeBranch`) are dataclasses of
+A forced response (:class:`workbench.hbm.forced.branch.Branch`) and a backbone
+(:class:`workbench.hbm.nlmodes.record.NlModeBranch`) are dataclasses of
 per-point arrays, a few other arrays and scalar attributes. Each class
 declares its file layout once (:class:`Layout`): the datasets, in the order
 they are written, and the attributes with the kind of value each holds.

@@ -8,8 +8,8 @@ its bookkeeping (a solve counts as converged only if our test said so) and
 the PETSc objects' lifetime. What differs between problems is the linear
 solver (the Jacobian matrix, the KSP and its preconditioner): the caller's
 ``linear(snes, ksp)`` sets it up (the forced response's shell LU and
-finite differences in :mod:`workbench.hbm.corrector`, the backbone's dense
-LU and Newton-Krylov in :mod:`workbench.hbm.nlmode_path`).
+finite differences in :mod:`workbench.hbm.forced.corrector`, the backbone's dense
+LU and Newton-Krylov in :mod:`workbench.hbm.nlmodes.problem`).
 
 The test, on the residual ``r`` (every equation but a constraint row) and
 the unknowns ``x`` (all but the last ``unscaled`` entries): converged when

@@ -61,7 +61,7 @@ class StepRule:
 
     @classmethod
     def forced(cls, opts, band: float) -> StepRule:
-        """The forced response's rule from :class:`workbench.hbm.options.SolverOptions`;
+        """The forced response's rule from :class:`workbench.hbm.core.options.SolverOptions`;
         ``band``: the frequency span (natural steps are in rad/s)."""
         if opts.continuation == "arclength":
             return cls(

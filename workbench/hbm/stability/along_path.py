@@ -49,7 +49,7 @@ import time
 
 import numpy as np
 
-from .stability import (
+from .hill import (
     CARRIED_STABLE,
     CARRIED_UNSTABLE,
     STABLE,
@@ -59,7 +59,7 @@ from .stability import (
     hill_arpack,
     hill_dense,
 )
-from .stability import unknown as stability_unknown
+from .hill import unknown as stability_unknown
 
 log = logging.getLogger(__name__)
 

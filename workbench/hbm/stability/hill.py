@@ -68,7 +68,7 @@ import numpy as np
 import scipy.linalg as sla
 
 STABLE, UNSTABLE, UNKNOWN = 1, 0, -1
-# a verdict carried to a point from checked neighbours (workbench.hbm.stability_path): the
+# a verdict carried to a point from checked neighbours (workbench.hbm.stability.along_path): the
 # neighbours' verdict, not established at the point itself
 CARRIED_STABLE, CARRIED_UNSTABLE = 2, 3
 VERDICT_NAMES = {

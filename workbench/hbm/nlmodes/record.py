@@ -1,6 +1,6 @@
 """The backbone record of a nonlinear mode: :class:`NlModeBranch` (arrays per point).
 
-Written by :func:`workbench.hbm.nlmodes.nonlinear_mode`, read by
+Written by :func:`workbench.hbm.nlmodes.backbone.nonlinear_mode`, read by
 :mod:`.synthesis` (the forced response rebuilt from the backbone), the
 studies and the figures; saved to HDF5 and CSV.
 """
@@ -13,8 +13,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .fourier import Fourier
-from .io.record import Layout, PathRecord
+from ..core.fourier import Fourier
+from ..io.record import Layout, PathRecord
 
 POINT_ARRAYS = (
     "amplitude",
@@ -172,7 +172,7 @@ class NlModeBranch(PathRecord):
 
     def to_csv(self, path: str | Path, unit: str = "m") -> Path:
         """One row per point: amplitude, frequency, damping, energy, status counts, outputs."""
-        from ..post.tables import write_rows_csv
+        from ...post.tables import write_rows_csv
 
         rows = []
         for i in range(self.n_points):

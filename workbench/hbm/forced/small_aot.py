@@ -1,7 +1,7 @@
 """The compiled small-system corrector ahead of time: one extension module, no numba at run time.
 
-``python -m workbench.hbm.small_aot`` (run by scripts/setup.sh) compiles
-:func:`workbench.hbm.small_kernels.solve_flat` once per contact law with
+``python -m workbench.hbm.forced.small_aot`` (run by scripts/setup.sh) compiles
+:func:`workbench.hbm.forced.small_kernels.solve_flat` once per contact law with
 numba's ahead-of-time compiler into ``workbench/hbm/_small_aot*.so``, with
 a digest of the sources it was built from (the kernels, the contact
 march, every law, the numba version). :func:`load` uses it only when the
@@ -26,7 +26,7 @@ _loaded: dict[str, object] = {}
 
 def sources() -> list[Path]:
     """The files the compiled kernels depend on."""
-    contact = _HERE.parent / "contact"
+    contact = _HERE.parents[1] / "contact"
     laws = sorted((contact / "laws").glob("*.py"))
     return [_HERE / "small_kernels.py", contact / "march.py", *laws]
 
@@ -74,8 +74,8 @@ def build(force: bool = False) -> Path | None:
         warnings.simplefilter("ignore")
         from numba.pycc import CC
 
-    from ..contact.laws import REGISTRY
-    from ..contact.march import _march_py
+    from ...contact.laws import REGISTRY
+    from ...contact.march import _march_py
     from . import small_kernels as K
 
     cc = CC(MODULE)

@@ -53,18 +53,18 @@ import time
 import numpy as np
 import scipy.linalg as sla
 
-from ..errors import InputError, check_choice, check_int, check_range
+from ...errors import InputError, check_choice, check_int, check_range
+from ..core.fourier import Fourier
+from ..core.ports import observation
+from ..core.system import System
+from ..path.engine import NUMERICAL, follow
+from ..path.problem import Stop
+from ..path.rows import Rows
+from ..path.step import StepRule
 from .epmc import TWO_PI, Epmc
 from .epmc_condensed import EpmcCondensed
-from .fourier import Fourier
-from .nlmode_branch import NlModeBranch
-from .nlmode_path import Backbone, BackboneCorrector
-from .path.engine import NUMERICAL, follow
-from .path.problem import Stop
-from .path.rows import Rows
-from .path.step import StepRule
-from .ports import observation
-from .system import System
+from .problem import Backbone, BackboneCorrector
+from .record import NlModeBranch
 
 log = logging.getLogger(__name__)
 
@@ -94,7 +94,7 @@ def make_problem(
     n_s = int(system.contacts.active.sum())
     modal = system.C is None
     if not modal:
-        from .linear import ModalLinear
+        from ..core.linear import ModalLinear
 
         _, modal = ModalLinear.is_modal(system.M, system.regularised_stiffness(), system.C)
     if space == "condensed" or (modal and n_s + 1 < system.n):
@@ -242,7 +242,7 @@ def nonlinear_mode(
     s_slip = float(np.log(0.999 * a_slip)) if system.n_el else -np.inf
     rule = StepRule.backbone(n_steps, max_points, max_change, max_fold_points, its_scale)
 
-    from ..log import progress_bar
+    from ...log import progress_bar
 
     span = np.log(a1) - np.log(a0)
     with progress_bar(f"nlmode {label or mode}", total=round(span, 6), unit="ln a") as bar:

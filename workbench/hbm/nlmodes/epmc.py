@@ -18,12 +18,12 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..errors import InputError, SolveError, check_int
-from .aft import aft, work_per_cycle
-from .fourier import Fourier
-from .loops import loop_dissipation
-from .ports import observation
-from .system import System
+from ...errors import InputError, SolveError, check_int
+from ..core.aft import aft, work_per_cycle
+from ..core.fourier import Fourier
+from ..core.loops import loop_dissipation
+from ..core.ports import observation
+from ..core.system import System
 
 TWO_PI = 2.0 * np.pi
 

@@ -12,7 +12,7 @@ compiled call per solve. ``SolverOptions(compiled="off")`` keeps the PETSc
 path; tests/test_small.py checks that both give the same branch to round-off.
 
 The kernels are compiled by numba, once per contact law: ahead of time by
-``python -m workbench.hbm.small_aot`` (scripts/setup.sh runs it; the module
+``python -m workbench.hbm.forced.small_aot`` (scripts/setup.sh runs it; the module
 then loads without numba) or, when that module is missing or out of date,
 just in time (cached on disk).
 """
@@ -25,9 +25,9 @@ import types
 
 import numpy as np
 
-from .balance import Evaluation, HarmonicBalance
+from ..core.balance import Evaluation, HarmonicBalance
+from ..core.options import SolverOptions
 from .corrector import Corrector
-from .options import SolverOptions
 
 log = logging.getLogger(__name__)
 
@@ -80,8 +80,8 @@ def kernels(law: str) -> tuple[object, object]:
     if law not in _jit:
         from numba import njit
 
-        from ..contact.laws import get_law
-        from ..contact.march import _march_py, specialise
+        from ...contact.laws import get_law
+        from ...contact.march import _march_py, specialise
         from . import small_kernels as K
 
         g = dict(K.__dict__)
@@ -101,8 +101,8 @@ class SmallCorrector(Corrector):
     def __init__(self, hb: HarmonicBalance, opts: SolverOptions, u_ref: float, w_ref: float):
         super().__init__(hb, opts, u_ref, w_ref)
         self.mode = "compiled"
-        from ..contact.laws import get_law
-        from ..contact.march import MAX_PERIODS, TOL
+        from ...contact.laws import get_law
+        from ...contact.march import MAX_PERIODS, TOL
 
         f, el = hb.fourier, hb.el
         self.law = el.law
@@ -220,7 +220,7 @@ class SmallCorrector(Corrector):
 
     def _keep(self, x: np.ndarray, w: float) -> Evaluation:
         """The workspace's evaluation at (x, w) as an :class:`Evaluation` (copied out)."""
-        from .aft import AftResult
+        from ..core.aft import AftResult
 
         hb = self.hb
         f = hb.fourier

@@ -25,9 +25,9 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..contact import ContactElements
-from ..errors import InputError
-from ..matrix_checks import csr_from_parts, real_values
+from ...contact import ContactElements
+from ...errors import InputError
+from ...matrix_checks import csr_from_parts, real_values
 
 
 def as_dense(A: object, name: str, n: int | None = None) -> np.ndarray:

@@ -12,9 +12,9 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from ..core.fourier import Fourier
+from ..core.system import System
 from .epmc import Epmc
-from .fourier import Fourier
-from .system import System
 
 
 class EpmcCondensed:
@@ -129,7 +129,7 @@ class EpmcCondensed:
 
     def _apply(self, coef: np.ndarray, F: np.ndarray) -> np.ndarray:
         """Multiply each complex harmonic of F (nh, m) by coef rows (one per harmonic)."""
-        from .linear import _combine
+        from ..core.linear import _combine
 
         return _combine(self.fourier, F, coef)
 

@@ -22,12 +22,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import get_law
-from ..contact.march import specialise
-from ..errors import InputError, SolveError, check_int, check_range
-from .fourier import Fourier
-from .ports import excitation_vector, observation
-from .system import System
+from ...contact import get_law
+from ...contact.march import specialise
+from ...errors import InputError, SolveError, check_int, check_range
+from ..core.fourier import Fourier
+from ..core.ports import excitation_vector, observation
+from ..core.system import System
 
 
 @dataclass
@@ -253,7 +253,7 @@ def time_response(
     four = Fourier(tuple(harmonics), spp)
     # samples at t_j = (j+1) T/spp: rotate so that index 0 is t = 0 (= t = T)
     X = four.P @ np.roll(y, 1, axis=0)
-    from ..contact import classify
+    from ...contact import classify
 
     res = TimeResponse(
         freq_hz=freq,

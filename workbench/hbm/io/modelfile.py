@@ -75,10 +75,10 @@ from typing import Any
 
 import numpy as np
 
-from ..config import load_record, param, read_toml
-from ..contact import LAWS, ContactElements
-from ..errors import InputError, WorkbenchError, check_int, check_range, did_you_mean
-from ..limits import (
+from ...config import load_record, param, read_toml
+from ...contact import LAWS, ContactElements
+from ...errors import InputError, WorkbenchError, check_int, check_range, did_you_mean
+from ...limits import (
     ENTRY_MAX,
     ENTRY_WHY,
     FRF_BAND_RATIO_MAX,
@@ -89,10 +89,10 @@ from ..limits import (
     MU_WHY,
     NT_WHY,
 )
-from ..matrix_checks import csr_from_parts
+from ...matrix_checks import csr_from_parts
+from ..core.options import SolverOptions
+from ..core.system import System
 from . import modelcheck
-from .options import SolverOptions
-from .system import System
 
 
 @dataclass(frozen=True)
@@ -192,7 +192,7 @@ class FrfModel:
 
 
 def _read_arrays(path: Path) -> dict[str, Any]:
-    from ..readers import NUMPY_SUFFIXES, _read_numpy
+    from ...readers import NUMPY_SUFFIXES, _read_numpy
 
     if path.suffix not in NUMPY_SUFFIXES:
         raise InputError("model.matrices", str(path), "a .npz or .h5/.hdf5 file")
@@ -225,7 +225,7 @@ def _matrix(arrays: dict[str, Any], name: str, key: str, file: Path):
 
 def _read_model_matrices(m: ModelSection, path: Path):
     """M, K, C, static force and the row labels (or None) of the [model] section."""
-    from .. import readers
+    from ... import readers
 
     roles = {"mass": m.mass, "stiffness": m.stiffness}
     if m.damping:
@@ -302,7 +302,7 @@ def _resolve_nodes(key: str, value: Any, ms) -> Any:
     """Replace ``[node, component]`` entries of a DOF list by row indices."""
     if not isinstance(value, list):
         return value
-    from ..readers import component_number
+    from ...readers import component_number
 
     out = []
     for i, v in enumerate(value):
@@ -317,7 +317,7 @@ def _resolve_nodes(key: str, value: Any, ms) -> Any:
 
 def _contact_by_node(g: ContactSection, ms, where: str) -> ContactSection:
     """The same section with ``dofs``/``other`` filled from node ids and components."""
-    from ..readers import component_number
+    from ...readers import component_number
 
     if g.dofs or g.other:
         raise InputError(f"{where}.dofs", g.dofs, "empty when nodes are given (one or the other)")

@@ -29,8 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError, check_int
-from ..limits import check_memory
+from ...errors import InputError, check_int
+from ...limits import check_memory
 
 
 def memory_estimate(harmonics: tuple[int, ...], nt: int, n: int, n_el: int) -> float:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import ContactElements, aft_march, classify
+from ...contact import ContactElements, aft_march, classify
 from .fourier import Fourier
 
 

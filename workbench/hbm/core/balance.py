@@ -57,7 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import InputError
+from ...errors import InputError
 from .aft import AftResult, aft, work_per_cycle
 from .fourier import Fourier
 from .linear import make_linear

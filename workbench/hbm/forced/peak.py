@@ -1,6 +1,6 @@
 """Refining the resonance peaks of a frequency response branch (searches at fixed frequency).
 
-Called by :func:`workbench.hbm.continuation.frequency_response` once the
+Called by :func:`workbench.hbm.forced.response.frequency_response` once the
 branch is computed: the largest ``|y(t)|`` and the largest harmonic-1
 amplitude of output 0 are each searched between the computed points around
 them (one shared grid of samples, then Brent's method from the best point
@@ -14,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
-from .balance import HarmonicBalance
+from ..core.balance import HarmonicBalance
+from ..core.options import SolverOptions
+from ..path.rows import Rows
 from .corrector import Corrector
-from .options import SolverOptions
-from .path.rows import Rows
 
 TWO_PI = 2.0 * np.pi
 N_GRID = 15  # samples between the outer neighbours of the peaks

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from ..config import param, validate
+from ...config import param, validate
 
 
 @dataclass(frozen=True)
@@ -123,7 +123,7 @@ class SolverOptions:
     stability: bool = param(
         True,
         "Hill's stability: established where it can change, carried between "
-        "(workbench.hbm.stability_path)",
+        "(workbench.hbm.stability.along_path)",
     )
     stability_stride: int = param(
         8,
@@ -172,7 +172,7 @@ class SolverOptions:
     def __post_init__(self) -> None:
         validate(self)
         if self.ds_min > self.ds_max:
-            from ..errors import InputError
+            from ...errors import InputError
 
             raise InputError("ds_min", self.ds_min, f"ds_min <= ds_max = {self.ds_max}")
 

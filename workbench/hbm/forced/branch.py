@@ -30,7 +30,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .io.record import Layout, PathRecord
+from ..io.record import Layout, PathRecord
 
 _ARRAYS = (
     "freq_hz",
@@ -152,7 +152,7 @@ class Branch(PathRecord):
 
     def stability_name(self, i: int) -> str:
         """ "stable", "unstable", "unknown", "stable (carried)" or "unstable (carried)"."""
-        from .stability import VERDICT_NAMES
+        from ..stability.hill import VERDICT_NAMES
 
         return VERDICT_NAMES.get(int(self.stability[i]), "unknown")
 
@@ -224,7 +224,7 @@ class Branch(PathRecord):
 
     def to_csv(self, path: str | Path, unit_scale: float = 1.0, unit: str = "m") -> Path:
         """One row per point: frequency, stability, per-output amplitudes, energies."""
-        from ..io import write_text
+        from ...io import write_text
 
         cols = ["freq_hz", "stable", "stability", "stability_how", "newton_its"]
         cols += ["energy_residual", "accuracy"]

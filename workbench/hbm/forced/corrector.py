@@ -31,9 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from .balance import Evaluation, HarmonicBalance
-from .options import SolverOptions
-from .path.newton import Newton, NewtonTest
+from ..core.balance import Evaluation, HarmonicBalance
+from ..core.options import SolverOptions
+from ..path.newton import Newton, NewtonTest
 
 log = logging.getLogger(__name__)
 

@@ -27,22 +27,22 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import InputError, check_range
-from .balance import HarmonicBalance
+from ...errors import InputError, check_range
+from ..core.balance import HarmonicBalance
+from ..core.fourier import Fourier, default_nt
+from ..core.options import SolverOptions
+from ..core.ports import observation
+from ..core.system import System
+from ..path.engine import NUMERICAL, follow, norm
+from ..path.problem import LostContact, Solution, Stop
+from ..path.rows import Rows
+from ..path.step import StepRule
+from ..stability.along_path import HOW_NONE, StabilityPath
+from ..stability.hill import STABLE, UNKNOWN
 from .branch import _ARRAYS, Branch
 from .corrector import Constraint, Corrector
-from .fourier import Fourier, default_nt
-from .options import SolverOptions
-from .path.engine import NUMERICAL, follow, norm
-from .path.problem import LostContact, Solution, Stop
-from .path.rows import Rows
-from .path.step import StepRule
 from .peak import insert_peaks, refine_peaks
-from .ports import observation
 from .small import make_corrector
-from .stability import STABLE, UNKNOWN
-from .stability_path import HOW_NONE, StabilityPath
-from .system import System
 
 log = logging.getLogger(__name__)
 
@@ -302,7 +302,7 @@ def frequency_response(
     timings = dict(setup=time.perf_counter() - t_start, stability=0.0, post=0.0)
     path = StabilityPath(hb, corr, opts) if opts.stability else None
 
-    from ..log import progress_bar
+    from ...log import progress_bar
 
     bar_ctx = progress_bar(
         f"frf {label or f'level {level:g}'}", total=round(f_hi - f_lo, 6), unit="Hz"
@@ -367,7 +367,7 @@ def frequency_response(
     st["accuracy_warning"] = _accuracy_warning(fourier, arrays, opts)
     if st["accuracy_warning"]:
         log.warning("%s%s", f"{label}: " if label else "", st["accuracy_warning"])
-    from ..config import record_to_dict
+    from ...config import record_to_dict
 
     return Branch(
         level=level,

@@ -43,8 +43,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, check_range
-from .nlmode_branch import NlModeBranch
+from ...errors import InputError, check_range
+from .record import NlModeBranch
 
 TWO_PI = 2.0 * np.pi
 # a peak inside a backbone segment wider than this in amplitude, whose output per modal

@@ -26,15 +26,15 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..errors import InputError, check_int
-from ..limits import (
+from ...errors import InputError, check_int
+from ...limits import (
     CONTACT_STIFFNESS_RATIO_MAX,
     CONTACT_STIFFNESS_WHY,
     LEVEL_OVER_SLIP_MAX,
     LEVEL_WHY,
     check_memory,
 )
-from ..matrix_checks import check_matrix, check_vector
+from ...matrix_checks import check_matrix, check_vector
 
 EIGEN_CHECK_MAX_DOFS = 2000  # the dense eigenvalue checks cost < 1 s up to this size
 SINGULAR_RATIO = 1e-12  # the solver refuses (K_r, M) whose eigenvalues span more than this
@@ -265,7 +265,7 @@ def check_stiffness(M: Any, K: Any, contacts: Any, groups: list) -> None:
 
 def check_size(harmonics: tuple[int, ...], nt: int, n: int, n_el: int, param: str) -> None:
     """Refuse a harmonic balance whose arrays would not fit in the memory available."""
-    from .fourier import default_nt, memory_estimate
+    from ..core.fourier import default_nt, memory_estimate
 
     nt_used = nt or default_nt(tuple(harmonics))
     need = memory_estimate(tuple(harmonics), nt_used, n, n_el)

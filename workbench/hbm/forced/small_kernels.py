@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
-march = None  # bound per law by workbench.hbm.small: the law's compiled contact march
+march = None  # bound per law by workbench.hbm.forced.small: the law's compiled contact march
 
-# integer codes of the outcome (workbench.hbm.small turns them into SNES reason names)
+# integer codes of the outcome (workbench.hbm.forced.small turns them into SNES reason names)
 ITERATING, CONV_FNORM, CONV_STALL, CONV_SNORM = 0, 1, 2, 3
 DIV_MAX_IT, DIV_LOCAL_MIN, DIV_NAN = 4, 5, 6
 

@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..contact import ContactElements
-from .system import System
+from ...contact import ContactElements
+from ..core.system import System
 
 
 @dataclass
@@ -289,7 +289,7 @@ def write_example_files(folder: str | Path) -> list[Path]:
     folder.mkdir(parents=True, exist_ok=True)
     out = []
     for name, ex in (("sdof_jenkins", sdof_jenkins()), ("two_dof_contact", two_dof_contact())):
-        from ..io import atomic_path
+        from ...io import atomic_path
 
         p = folder / f"{name}.npz"
         with atomic_path(p) as tmp:

@@ -35,11 +35,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..contact import get_law
-from ..contact.march import specialise
-from ..errors import InputError, SolveError, check_int, check_range
-from .ports import excitation_vector, observation
-from .system import System
+from ...contact import get_law
+from ...contact.march import specialise
+from ...errors import InputError, SolveError, check_int, check_range
+from ..core.ports import excitation_vector, observation
+from ..core.system import System
 
 
 @dataclass

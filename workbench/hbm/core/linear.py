@@ -12,7 +12,7 @@ Two backends work in their own coordinates ``z``:
   ``Z_k`` per harmonic and frequency, cached for the last frequency.
 
 Both take and return real harmonic arrays ``(nh, m)`` in the layout of
-:mod:`workbench.hbm.fourier`.
+:mod:`workbench.hbm.core.fourier`.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ..errors import SolveError
+from ...errors import SolveError
 from .fourier import Fourier
 
 SPREAD_MAX = 1e12  # eigenvalues of (K_r, M) spread wider lose the receptances' digits

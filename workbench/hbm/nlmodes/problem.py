@@ -18,14 +18,14 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, check_choice
+from ...errors import InputError, check_choice
+from ..path.newton import Newton, NewtonTest
+from ..path.problem import LostContact, Solution, Stop
+from ..path.rows import Rows
 from .epmc import TWO_PI, Epmc
-from .nlmode_branch import POINT_ARRAYS
-from .path.newton import Newton, NewtonTest
-from .path.problem import LostContact, Solution, Stop
-from .path.rows import Rows
+from .record import POINT_ARRAYS
 
-log = logging.getLogger("workbench.hbm.nlmodes")
+log = logging.getLogger("workbench.hbm.nlmodes.backbone")
 
 KRYLOV_RTOL = 1e-8  # GMRES: relative residual of each Newton step's linear solve
 KRYLOV_MAX_ITS = 40  # GMRES iterations per linear solve (no restart below that)

@@ -1,0 +1,2 @@
+"""Stability of periodic solutions: Hill's method (:mod:`.hill`) and the verdicts along a
+branch (:mod:`.along_path`)."""
