@@ -1,3 +1,3 @@
 """Forced responses: the curve at one excitation level over a band (:mod:`.response`), its
-corrector (PETSc, :mod:`.corrector`; compiled for small systems, :mod:`.small`), peaks
-and the record (:mod:`.branch`)."""
+corrector (PETSc, :mod:`..corrector`; compiled for small systems, :mod:`..small`), peaks
+and the record (:mod:`..branch`)."""

@@ -4,7 +4,7 @@ Per point ``i`` (in continuation order, so a curve that turns back keeps
 its order): ``freq_hz[i]``; ``stability[i]`` (Hill's verdict: 1 stable,
 0 unstable, -1 unknown: not computed, eigen-solver failure or a failed
 count check; 2 and 3: stable or unstable carried from checked neighbours,
-not established at the point, see :mod:`.stability_path`),
+not established at the point, see :mod:`..stability.along_path`),
 ``stability_how[i]`` (0 not computed, 1 Hill's method at the point, 2 every
 contact stuck: the linear system's verdict, 3 carried) and ``stable[i]``
 (True only for an established stable verdict; use :attr:`Branch.unstable`,
@@ -12,13 +12,13 @@ contact stuck: the linear system's verdict, 3 carried) and ``stable[i]``
 ``energy_residual[i]`` (relative, work of the excitation against viscous +
 contact work per cycle); ``accuracy[i]`` (the loop-energy vs harmonic-work
 mismatch, a fraction of the excitation work: it grows when ``nt`` or the
-harmonics do not resolve the contact loops, see :mod:`.balance`);
+harmonics do not resolve the contact loops, see :mod:`..core.balance`);
 ``out_amp[i, j]`` the largest ``|y_j(t)|`` over the period and
 ``out_h1[i, j]`` the harmonic-1 amplitude of output ``j`` (model length
 unit); ``out_harm[i]`` (nh, n_out) the output harmonics;
 ``status[i, e]`` (0 stuck, 1 stick-slip, 2 partial separation, 3 full
 separation); ``friction_energy[i, e]`` (J per cycle); ``x[i]`` the solved
-unknowns (m; the layout of :mod:`.balance`), from which
+unknowns (m; the layout of :mod:`..core.balance`), from which
 ``HarmonicBalance.response`` recovers every DOF.
 """
 

@@ -53,14 +53,14 @@ _DTYPES = dict(
 
 
 class ForcedResponse:
-    """The forced response at one level as a path problem (:mod:`.path.engine`).
+    """The forced response at one level as a path problem (:mod:`..path.engine`).
 
     Unknowns ``x`` (m) and ``w`` (rad/s), scaled ``y = (x / u_ref, w / w_ref)``.
     Metric: ``|dy|^2 = sum (a_j dy_j)^2`` with ``a = (c_j / xi, 1 / band)``: the
     unknowns relative to the largest solution norm met so far (``c_j =
     dc_weight`` for the mean components, 1 otherwise) and the frequency
     relative to the band. A point's row: outputs, contact status, energies,
-    Hill's verdict (:class:`.stability_path.StabilityPath`).
+    Hill's verdict (:class:`..stability.along_path.StabilityPath`).
     """
 
     def __init__(self, hb, corr, opts, level, band_hz, u_ref, path, timings, bar, progress):
@@ -213,7 +213,7 @@ class ForcedResponse:
             self.progress((f - f_lo) / (f_hi - f_lo), f, n)
 
     def say(self, what: str, **ctx) -> str:
-        """The words of a stop (see :func:`.path.engine.follow`)."""
+        """The words of a stop (see :func:`..path.engine.follow`)."""
         opts, n = self.opts, self.rows.n
         arc = opts.continuation == "arclength"
         if what == "max_points":
@@ -266,7 +266,7 @@ def frequency_response(
     the phase of that DOF's force (an inter-blade phase angle, say).
     ``outputs``: DOF indices or an (n_out, n) observation matrix (default
     every DOF). ``harmonics``: the harmonic list (must include 1); ``nt``
-    samples per period (default :func:`.fourier.default_nt`).
+    samples per period (default :func:`..core.fourier.default_nt`).
     ``progress(fraction_of_band, freq_hz, n_points)`` is called after each
     point; a progress bar on stderr shows the frequency reached.
     Never raises for a failed solve: the returned :class:`Branch` says

@@ -9,8 +9,8 @@ contacts,
 so that the free motion of a damped mode becomes periodic: ``xi`` (1/s)
 supplies exactly the energy the viscous damping and the friction take per
 cycle. The periodic motion is expanded in the harmonic list of
-:mod:`.fourier` (the same AFT march, contact law and preload balance as the
-forced response, :mod:`.balance`) and continued in the modal amplitude
+:mod:`..core.fourier` (the same AFT march, contact law and preload balance as the
+forced response, :mod:`..core.balance`) and continued in the modal amplitude
 ``a`` (sqrt(kg) m): the harmonics are ``Q = a psi`` with the mass
 normalisation of the harmonic-1 shape and a phase condition,
 
@@ -28,16 +28,16 @@ with ``A = K_r - (k w)^2 M`` and ``B = k w (C - xi M)``::
     Rc_k = A psi_c + B psi_s + W^T Gc_k / a,   Rs_k = A psi_s - B psi_c + W^T Gs_k / a
 
 plus ``K_r psi_0 + W^T (G_0 - f(0)) / a`` for harmonic 0 (``G = f - K_c u``
-as in :mod:`.balance`). The Jacobian is analytic (the AFT's exact
+as in :mod:`..core.balance`). The Jacobian is analytic (the AFT's exact
 derivative for the contacts); each point is solved by PETSc SNES (Newton
 with a backtracking line search, a dense LU of the bordered Jacobian, rebuilt
-every third iteration by default: :class:`.nlmode_path.BackboneCorrector`).
+every third iteration by default: :class:`.problem.BackboneCorrector`).
 
 The point equations live in :mod:`.epmc` (:class:`Epmc` on every DOF,
 :class:`EpmcCondensed` on the contact coordinates); this module chooses the
 mode and the amplitude range and continues the points (PETSc SNES).
 
-The result, :class:`NlModeBranch` (:mod:`.nlmode_branch`), holds per point the modal amplitude,
+The result, :class:`NlModeBranch` (:mod:`.record`), holds per point the modal amplitude,
 frequency, ``xi``, damping ratio, friction energy per element and per
 cycle, contact status, the energy balance of the point, the MAC of the
 harmonic-1 shape against the low-amplitude one, the share of the motion in
@@ -206,7 +206,7 @@ def nonlinear_mode(
     contacts, :class:`EpmcCondensed`) solves each Newton step by GMRES on the
     exact Jacobian, preconditioned by the LU of an earlier one (refactorised
     only when GMRES struggles; ``jacobian_lag`` is then unused); "dense" the
-    LU of the Jacobian itself (:class:`.nlmode_path.BackboneCorrector`).
+    LU of the Jacobian itself (:class:`.problem.BackboneCorrector`).
     Where a point finds the damper out of contact, the step is halved until
     the last point lies within 2 % in amplitude below it. With ``levels``, a point is then solved at
     each level's synthesised peak where the backbone's segment there spans

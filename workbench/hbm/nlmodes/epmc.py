@@ -3,9 +3,9 @@
 :class:`Epmc` works on every DOF of the reduced model;
 :class:`~.epmc_condensed.EpmcCondensed` (its own module) on the contact
 displacements and the followed mode (modal damping only), and converts its
-solution to the same mass normalisation; :func:`.nlmodes.make_problem` picks
+solution to the same mass normalisation; :func:`.backbone.make_problem` picks
 one.
-The equations are given in :mod:`.nlmodes`, which continues the points
+The equations are given in :mod:`.backbone`, which continues the points
 into a backbone.
 """
 

@@ -1,4 +1,4 @@
-"""A nonlinear mode's backbone as a path problem (:mod:`.path.engine`), and its corrector.
+"""A nonlinear mode's backbone as a path problem (:mod:`..path.engine`), and its corrector.
 
 Unknowns ``Y = [y / var_scale, ln a]`` of the EPMC problem (:mod:`.epmc`,
 :mod:`.epmc_condensed`) as the corrector (:class:`BackboneCorrector`)
@@ -50,7 +50,7 @@ class _Shell:
 
 
 class BackboneCorrector:
-    """Newton (:class:`.path.newton.Newton`, backtracking line search) on the bordered
+    """Newton (:class:`..path.newton.Newton`, backtracking line search) on the bordered
     system of a backbone point.
 
     ``linear``: "dense" (the LU of the Jacobian, PETSc's, rebuilt every ``lag``
@@ -226,7 +226,7 @@ class Backbone:
     ``f_top``, ``f1v``: the largest level and the force, to stop once the
     backbone covers that level's peak (0, None: no such stop);
     ``s_slip``: ``ln a`` just below the first slip; ``plateau_points``: the
-    amplitude-limit stop (see :func:`.nlmodes.nonlinear_mode`).
+    amplitude-limit stop (see :func:`.backbone.nonlinear_mode`).
     """
 
     def __init__(self, prob, snes, a_range, f_top, f1v, s_slip, plateau_points, rule, bar):
@@ -370,7 +370,7 @@ class Backbone:
         bar.update(0)
 
     def say(self, what: str, **ctx) -> str:
-        """The words of a stop (see :func:`.path.engine.follow`)."""
+        """The words of a stop (see :func:`..path.engine.follow`)."""
         if what == "max_points":
             return f"stopped after max_points = {self.rule.max_points}"
         if what == "max_solves":

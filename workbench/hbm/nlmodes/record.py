@@ -71,7 +71,7 @@ class NlModeBranch(PathRecord):
     harmonics other than 1), ``out_amp`` / ``out_h1`` (n_out: the largest
     ``|y(t)|`` and the harmonic-1 amplitude of each output, model length
     unit), ``newton_its``, ``psi`` (nh * n: the harmonics per unit modal
-    amplitude, layout of :mod:`.fourier`).
+    amplitude, layout of :mod:`..core.fourier`).
     """
 
     mode: int

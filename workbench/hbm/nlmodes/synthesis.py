@@ -8,7 +8,7 @@ projection of the equation of motion on the harmonic-1 shape gives
     a^2 [ (w(a)^2 - W^2)^2 + (xi(a) w(a) + c(a) (W - w(a)))^2 ] = |psi_1(a)^H f1|^2 level^2
 
 with ``w``, ``xi`` (``2 D w``), ``c = psi_1^H C psi_1`` (the viscous share
-of ``xi``) and ``psi`` from the backbone (:class:`.nlmode_branch.NlModeBranch`).
+of ``xi``) and ``psi`` from the backbone (:class:`.record.NlModeBranch`).
 The friction share ``xi - c`` is taken as rate independent (its work per
 cycle depends on the amplitude only, as for Coulomb friction), the viscous
 share as proportional to ``W``; Krack's original form ``xi W`` for the

@@ -66,13 +66,15 @@ class PathProblem(Protocol):
         """The direction of the first step from the first point."""
 
     def tangent(self, p: Solution) -> np.ndarray:
-        """The tangent of the curve at ``p`` (unnormalised, any orientation)."""
+        """The tangent of the curve at ``p`` (unnormalised, any orientation); only for
+        ``predictor = "tangent"``."""
 
     def solve_plane(self, y0: np.ndarray, yp: np.ndarray, t: np.ndarray, m: np.ndarray):
         """Solve from ``y0`` on the plane through ``yp`` normal to ``t`` (metric ``m``)."""
 
     def solve_sphere(self, p: Solution, yp: np.ndarray, t: np.ndarray, m: np.ndarray, ds: float):
-        """Solve from ``yp`` on the sphere of radius ``ds`` around ``p`` (metric ``m``)."""
+        """Solve from ``yp`` on the sphere of radius ``ds`` around ``p`` (metric ``m``);
+        only for a rule with ``fallbacks``."""
 
     def solve_at(self, guess: Any, param: float) -> Solution:
         """Solve at a fixed parameter from ``guess`` (the problem's own form)."""
@@ -93,7 +95,8 @@ class PathProblem(Protocol):
         """Append ``p`` to ``rows`` (may raise :class:`LostContact` or :class:`Stop`)."""
 
     def record_past_end(self, p: Solution, q: Solution) -> None:
-        """Record ``q`` (past ``end``) where the point at ``end`` failed."""
+        """Record ``q`` (past ``end``) where the point at ``end`` failed; only for
+        ``end = "once"``."""
 
     def after_point(self) -> None:
         """Called after each point of the loop is recorded (may raise :class:`Stop`)."""

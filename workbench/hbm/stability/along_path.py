@@ -1,6 +1,6 @@
 """Where Hill's method runs along a branch, and what every other point is told.
 
-Hill's verdict (:mod:`.stability`) costs a factorisation of the harmonic
+Hill's verdict (:mod:`.hill`) costs a factorisation of the harmonic
 balance Jacobian and an eigen-solve, as much as the rest of a point or
 several times more. Along a branch it is established where it can change
 and carried between, and every point says which (``how``):

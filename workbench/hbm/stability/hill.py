@@ -112,7 +112,7 @@ def mean_harmonic(
     """Mean harmonic index ``kbar`` of each eigenvector (and its RMS index if ``moments``).
 
     ``P`` (nh, n, m) complex: m eigenvectors on the real Fourier layout of
-    :mod:`.fourier` (``Q0, Qc_1, Qs_1, ...``). The content at
+    :mod:`..core.fourier` (``Q0, Qc_1, Qs_1, ...``). The content at
     ``exp(+- i k w t)`` is ``(Qc -+ i Qs) / 2``; ``kbar = sum k |c_k|^2 /
     sum |c_k|^2`` over ``k = -H..H``.
     """
@@ -211,7 +211,7 @@ def hill_dense(
     """All Hill exponents of a small problem from its dense matrices; centred ones kept.
 
     ``harmonics``: the harmonic list of the layout (``d0`` is ``(nh n, nh n)``,
-    harmonic-major, :mod:`.fourier`); ``omega`` in rad/s.
+    harmonic-major, :mod:`..core.fourier`); ``omega`` in rad/s.
     """
     n_all = d0.shape[0]
     lam, vec = hill_eig(d0, d1, d2)
