@@ -1,0 +1,90 @@
+"""Craig-Bampton reduction of the bladed-disk sector per nodal diameter onto the damper's interface.
+
+The interface of nodal diameter ``k`` is the set of master DOFs (see
+:mod:`.cyclic`) of the sector's platform contact nodes: the nodes of side 0
+on this sector's right platform half and, for side 1, the left-half nodes
+whose images (turned by the sector angle, phase-shifted by ``phi``) are the
+next sector's platform nodes. For ``0 < k < N/2`` each node carries the
+``a`` and the ``b`` field, so the interface has ``2 x 3 x n_pairs`` DOFs;
+for ``k = 0`` and ``N/2`` ``3 x n_pairs``.
+
+Reduced coordinates ``q = (u_B, eta)``: the interface DOFs (physical
+displacements, in the order of :attr:`CyclicReduced.boundary_dofs`) and
+``n_modes`` fixed-interface modal amplitudes. The static (constraint) modes
+make the reduced stiffness exact for any static interface load; the
+eigenvalues of ``(K_r, M_r)`` lie above the unreduced ones
+(Rayleigh-Ritz) and converge to them as ``n_modes`` grows.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import check_int
+from .cyclic import CyclicSector, eigen, nd_matrices
+
+
+@dataclass(frozen=True)
+class CyclicReduced:
+    """One nodal diameter's Craig-Bampton model of the sector (SI)."""
+
+    k: int
+    n_blades: int
+    K: np.ndarray  # (n_b + n_modes, n_b + n_modes) N/m
+    M: np.ndarray  # kg
+    boundary_nodes: np.ndarray  # (n_pairs,) sector node of each pair (side 1: this sector's image)
+    side: np.ndarray  # (n_pairs,)
+    copies: int  # 1 (k = 0, N/2: field a) or 2 (fields a then b)
+    n_modes: int
+
+    @property
+    def n_boundary(self) -> int:
+        """Interface DOFs: copies x n_pairs x 3, ordered (copy, pair, x/y/z)."""
+        return self.copies * 3 * len(self.boundary_nodes)
+
+
+def reduce_nd(cs: CyclicSector, k: int, n_modes: int = 20) -> CyclicReduced:
+    """Craig-Bampton reduction of ND ``k`` onto the platform contact nodes' master DOFs."""
+    n_modes = check_int("n_modes", n_modes, 1, 2000)
+    Kk, Mk, T = nd_matrices(cs, k)
+    mdofs = cs.master_dofs()
+    copies = T.shape[0] // (3 * cs.n_nodes)
+    pos = np.full(3 * cs.n_nodes, -1, dtype=np.int64)
+    pos[mdofs] = np.arange(len(mdofs))
+    nodes = np.asarray(cs.platform_nodes)
+    one = (3 * nodes[:, None] + np.arange(3)[None, :]).ravel()
+    b_one = pos[one]
+    if np.any(b_one < 0):
+        raise ValueError("a platform contact node is not a master node of the cyclic sector")
+    b = np.concatenate([b_one + c * len(mdofs) for c in range(copies)])
+    n = Kk.shape[0]
+    inner = np.setdiff1d(np.arange(n), b)
+    Kii = Kk[inner][:, inner].tocsc()
+    Kib = Kk[inner][:, b]
+    Mii = Mk[inner][:, inner].tocsc()
+    from scipy.sparse.linalg import splu
+
+    lu = splu(Kii)
+    psi = -lu.solve(Kib.toarray())
+    _, phi = eigen(Kii, Mii, n_modes)
+    nb = len(b)
+    Tcb = np.zeros((n, nb + phi.shape[1]))
+    Tcb[b, :nb] = np.eye(nb)
+    Tcb[inner, :nb] = psi
+    Tcb[inner, nb:] = phi
+    Ts = sp.csr_matrix(Tcb)
+    Kr = (Ts.T @ (Kk @ Ts)).toarray()
+    Mr = (Ts.T @ (Mk @ Ts)).toarray()
+    return CyclicReduced(
+        k=int(k),
+        n_blades=cs.n_blades,
+        K=0.5 * (Kr + Kr.T),
+        M=0.5 * (Mr + Mr.T),
+        boundary_nodes=nodes,
+        side=np.asarray(cs.side),
+        copies=copies,
+        n_modes=int(phi.shape[1]),
+    )
