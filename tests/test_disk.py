@@ -197,3 +197,20 @@ def test_upd_disk_writes_the_fan_diagram(tmp_path, upd):
     assert np.all(stuck[1:, 0] > 1.05 * free[1:, 0])
     assert abs(stuck[0, 0] / free[0, 0] - 1) < 0.05
     assert_nonblank(out / "fan.png")
+
+
+def test_complex_form_has_the_real_forms_eigenvalues(clamped):
+    """The Hermitian ND-1 matrices on U = a - i b (what a complex harmonic balance uses) have
+    the real cos/sin form's frequencies, each once; ND N-1 (the other travelling direction)
+    is their complex conjugate."""
+    from scipy.sparse.linalg import eigsh
+
+    from workbench.fe.cyclic import assemble_sector, complex_nd_matrices, nd_modes, to_hz
+
+    cs = assemble_sector(clamped, with_damper=False)
+    ref = nd_modes(cs, 1, 3)[0]
+    Kc, Mc = complex_nd_matrices(cs, 1)
+    lam = eigsh(Kc.tocsc(), k=3, M=Mc.tocsc(), sigma=-1.0, which="LM", return_eigenvectors=False)
+    assert np.allclose(np.sort(to_hz(lam.real)), ref, rtol=1e-9, atol=0)
+    Kb, _ = complex_nd_matrices(cs, 5)
+    assert abs(Kb - Kc.conj()).max() <= 1e-12 * abs(Kc).max()

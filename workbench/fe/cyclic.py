@@ -268,6 +268,22 @@ def transformation(cs: CyclicSector, k: int) -> sp.csr_matrix:
     return sp.bmat([[C + c * W, s * W], [-s * W, C + c * W]], format="csr")
 
 
+def complex_nd_matrices(cs: CyclicSector, k: int) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """Hermitian ``(K_c, M_c)`` of nodal diameter ``k`` on the complex amplitude ``U = a - i b``.
+
+    ``T_c = C + e^{i phi} W`` (a slave is ``R e^{i phi}`` times its master), ``K_c = T_c^H K
+    T_c``: the form a harmonic balance with complex harmonics uses. Any ``k`` in 0..N-1 is
+    accepted (``k`` and ``N - k`` are complex conjugates: the backward and forward waves of
+    one nodal diameter). Same eigenvalues as :func:`nd_matrices`, each once.
+    """
+    k = check_int("nodal diameter", k, 0, cs.n_blades - 1)
+    C, W, _ = _slave_map(cs)
+    Tc = (C + np.exp(2j * math.pi * k / cs.n_blades) * W).tocsr()
+    Kc = (Tc.conj().T @ cs.K @ Tc).tocsr()
+    Mc = (Tc.conj().T @ cs.M @ Tc).tocsr()
+    return 0.5 * (Kc + Kc.conj().T), 0.5 * (Mc + Mc.conj().T)
+
+
 def nd_matrices(cs: CyclicSector, k: int) -> tuple[sp.csr_matrix, sp.csr_matrix, sp.csr_matrix]:
     """``(K_k, M_k, T)`` of nodal diameter ``k`` (real symmetric, N/m and kg)."""
     T = transformation(cs, k)
@@ -304,10 +320,11 @@ def eigen(K, M, n: int) -> tuple[np.ndarray, np.ndarray]:
 
     n = min(n, K.shape[0] - 2)
     sigma = -((2 * math.pi * SHIFT_HZ) ** 2)
-    sol = eigen_solve(
-        _to_petsc(K), _to_petsc(M), n, sigma=sigma, prefix="upd_cyclic_", what="cyclic modes"
-    )
+    A, B = _to_petsc(K), _to_petsc(M)
+    sol = eigen_solve(A, B, n, sigma=sigma, prefix="upd_cyclic_", what="cyclic modes")
     X = np.column_stack([v.getArray().copy() for v in sol.vectors])
+    for obj in (*sol.vectors, sol.eps, A, B):  # free the MUMPS factor now, not at exit
+        obj.destroy()
     return sol.eigenvalues, X
 
 
