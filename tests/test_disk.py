@@ -145,7 +145,7 @@ def test_craig_bampton_per_nodal_diameter_converges_from_above(clamped):
     "n, over, param",
     [
         (1, {}, "disk.n_blades"),  # fewer than two blades
-        (4, {}, "rig.base.height_mm"),  # the hub would reach the axis
+        (4, {}, "disk.n_blades"),  # the hub would reach the axis
         (
             16,
             {"rig": {"base": {"height_mm": 10.0}, "platform": {"top_below_tip_mm": 20.0}}},
@@ -164,6 +164,15 @@ def test_bad_disk_input_names_the_parameter(n, over, param):
         make_disk_layout(gp, load_disk_params(n_blades=n))
     assert e.value.param == param
     assert "\n" not in str(e.value) and "expected" in str(e.value)
+    if param == "disk.n_blades" and n > 1:  # the smallest number of blades that fits
+        assert e.value.allowed.endswith("<= disk.n_blades <= 400")
+
+
+def test_upd_disk_bad_input_is_one_line(upd, tmp_path):
+    r = upd("disk", "--geometry", str(PAPER), "--n-blades", "4", "--out", str(tmp_path / "o"))
+    assert r.code == 2
+    assert r.err.strip().count("\n") == 0 and "disk.n_blades = 4" in r.err
+    assert "6 <= disk.n_blades <= 400" in r.err
 
 
 def test_upd_disk_writes_the_fan_diagram(tmp_path, upd):
@@ -214,3 +223,15 @@ def test_complex_form_has_the_real_forms_eigenvalues(clamped):
     assert np.allclose(np.sort(to_hz(lam.real)), ref, rtol=1e-9, atol=0)
     Kb, _ = complex_nd_matrices(cs, 5)
     assert abs(Kb - Kc.conj()).max() <= 1e-12 * abs(Kc).max()
+
+
+def test_second_build_reuses_the_meshes(clamped, tmp_path):
+    """Same inputs: the record and meshes are reused (digest equal, files untouched);
+    another number of blades is another digest."""
+    folder = clamped.sector_msh.parent
+    before = clamped.sector_msh.stat().st_mtime_ns
+    again = _sector(folder)
+    assert again.digest == clamped.digest and again.sector_msh.stat().st_mtime_ns == before
+    other = _sector(tmp_path, n=7)
+    assert other.digest != clamped.digest and other.n_blades == 7
+    assert abs(other.stats["sector_angle_deg"] - 360 / 7) < 1e-12

@@ -356,7 +356,19 @@ def fan(cs: CyclicSector, n_families: int, comm=None) -> np.ndarray:
     """
     nds = cs.nodal_diameters()
     rank, size = (0, 1) if comm is None else (comm.rank, comm.size)
-    mine = {k: nd_modes(cs, k, n_families)[0] for k in nds[rank::size]}
+    import time
+
+    mine = {}
+    for k in nds[rank::size]:
+        t0 = time.perf_counter()
+        mine[k] = nd_modes(cs, k, n_families)[0]
+        log.info(
+            "ND %d of %d: %s Hz (%.1f s)",
+            k,
+            nds[-1],
+            ", ".join(f"{f:.1f}" for f in mine[k]),
+            time.perf_counter() - t0,
+        )
     if comm is not None and size > 1:
         allp = comm.allgather(mine)
         mine = {k: v for d in allp for k, v in d.items()}

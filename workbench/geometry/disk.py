@@ -182,10 +182,12 @@ def _problem(lay: Layout, n: int) -> tuple[str, float, str, str] | None:
         )
     if g["r_in"] < clr:
         return (
-            "rig.base.height_mm",
-            rig.base.height_mm,
-            f"rig.base.height_mm <= {g['r_root'] - clr:.4g} mm for {n} blades",
-            f"the hub would reach the disk axis (blade root radius {g['r_root']:.4g} mm)",
+            "disk.n_blades",
+            n,
+            "more blades",
+            f"the hub, rig.base.height_mm = {rig.base.height_mm:g} mm deep, would reach the disk "
+            f"axis below blade roots at radius {g['r_root']:.4g} mm; a hub at most "
+            f"{g['r_root'] - clr:.4g} mm deep fits {n} blades",
         )
     ha = g["alpha"] / 2
     # the blade's root corner (t/2, blade_z0) must stay inside the sector
