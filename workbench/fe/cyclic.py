@@ -172,11 +172,8 @@ def assemble_sector(rec, contact_params=None, *, with_damper: bool = True) -> Cy
             damper_nodes=np.full(len(platform), -1),
             side=side,
         )
-    dam = assemble_body(read_msh(rec.damper_msh, MPI.COMM_SELF), mat, name="damper")
-    xd = dam.V.tabulate_dof_coordinates()
-    Kd, Md = _petsc_to_scipy(dam.K), _petsc_to_scipy(dam.M)
+    Kd, Md, xd, dnode = damper_matrices(rec)
     n_d = xd.shape[0]
-    dnode = _match(rec.contact.points, xd, tol, "damper contact nodes")
     one = np.flatnonzero(side == 1)
     n_img = len(one)
     n = n_s + n_d + n_img
@@ -216,6 +213,21 @@ def assemble_sector(rec, contact_params=None, *, with_damper: bool = True) -> Cy
         damper_nodes=d_nodes,
         side=side,
     )
+
+
+def damper_matrices(rec) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray, np.ndarray]:
+    """The free damper of a DiskSector: ``(K, M, node coords, contact node of each pair)``."""
+    from mpi4py import MPI
+
+    from .elasticity import Material, assemble_body
+    from .mesh import read_msh
+
+    mat = Material.from_dict(rec.material)
+    dam = assemble_body(read_msh(rec.damper_msh, MPI.COMM_SELF), mat, name="damper")
+    xd = dam.V.tabulate_dof_coordinates()
+    tol = MATCH_REL_TOL * float(np.ptp(xd, axis=0).max())
+    dnode = _match(rec.contact.points, xd, tol, "damper contact nodes")
+    return _petsc_to_scipy(dam.K), _petsc_to_scipy(dam.M), xd, dnode
 
 
 def _drop_dirichlet(A: sp.csr_matrix, fixed_nodes: np.ndarray) -> sp.csr_matrix:

@@ -88,3 +88,61 @@ def reduce_nd(cs: CyclicSector, k: int, n_modes: int = 20) -> CyclicReduced:
         copies=copies,
         n_modes=int(phi.shape[1]),
     )
+
+
+def stuck_nd_system(
+    red: CyclicReduced,
+    Kd: sp.spmatrix,
+    Md: sp.spmatrix,
+    damper_nodes: np.ndarray,
+    springs: np.ndarray,
+    rot: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The reduced sector of ND ``red.k`` with its damper stuck: ``(K, M)`` on
+    ``(q_sector, d_a[, d_b])`` (the damper's DOFs once per copy).
+
+    The damper node of pair ``i`` is tied by ``springs[i]`` (3 x 3, disk frame) to its
+    platform displacement: for side 0 the interface DOFs of pair ``i``; for side 1 the
+    neighbour's node, ``R (cos phi u_a + sin phi u_b)`` (copy a) and
+    ``R (cos phi u_b - sin phi u_a)`` (copy b), ``u`` the interface DOFs of the image node
+    (``k = 0``, ``N/2``: ``+-R u_a``). The linear limit of the sector's harmonic balance.
+    """
+    import math
+
+    phi = 2 * math.pi * red.k / red.n_blades
+    c, s = math.cos(phi), math.sin(phi)
+    n_p = len(red.boundary_nodes)
+    n_q = red.K.shape[0]
+    n_d = Kd.shape[0]
+    cp = red.copies
+    n = n_q + cp * n_d
+    G = np.zeros((cp * 3 * n_p, n))  # relative displacement damper - platform, per copy/pair
+    for a in range(cp):
+        for i in range(n_p):
+            r = slice(3 * (a * n_p + i), 3 * (a * n_p + i) + 3)
+            dn = n_q + a * n_d + 3 * int(damper_nodes[i])
+            G[r, dn : dn + 3] += np.eye(3)
+            own = [3 * (b * n_p + i) for b in range(cp)]
+            if red.side[i] == 0:
+                G[r, own[a] : own[a] + 3] -= np.eye(3)
+            elif cp == 1:
+                G[r, own[0] : own[0] + 3] -= c * rot  # c = +-1 at k = 0, N/2
+            else:
+                other = 1 - a
+                sign = 1.0 if a == 0 else -1.0
+                G[r, own[a] : own[a] + 3] -= c * rot
+                G[r, own[other] : own[other] + 3] -= sign * s * rot
+    Sb = np.zeros((cp * 3 * n_p, cp * 3 * n_p))
+    for a in range(cp):
+        for i in range(n_p):
+            j = 3 * (a * n_p + i)
+            Sb[j : j + 3, j : j + 3] = springs[i]
+    K = np.zeros((n, n))
+    M = np.zeros((n, n))
+    K[:n_q, :n_q], M[:n_q, :n_q] = red.K, red.M
+    Kd_, Md_ = Kd.toarray(), Md.toarray()
+    for a in range(cp):
+        sl = slice(n_q + a * n_d, n_q + (a + 1) * n_d)
+        K[sl, sl], M[sl, sl] = Kd_, Md_
+    K += G.T @ Sb @ G
+    return 0.5 * (K + K.T), 0.5 * (M + M.T)
