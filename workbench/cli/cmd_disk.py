@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
 from .main import Context, add_geometry_options
@@ -34,11 +35,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--damper", default="cone", metavar="{" + ",".join(names()) + "}", help="damper shape"
     )
     add_geometry_options(parser, contact_help="TOML file with a [contact] table (stuck springs)")
-    parser.add_argument("--disk-file", default=None, metavar="FILE", help="a [disk] table")
+    parser.add_argument(
+        "--disk-file", type=Path, default=None, metavar="FILE", help="TOML file with a [disk] table"
+    )
     add_value(
         parser,
         "--n-blades",
-        Value("int", 2, MAX_BLADES, name="disk.n_blades"),
+        Value("int", 2, MAX_BLADES),
         "number of blades instead of [disk] n_blades",
         metavar="N",
     )
