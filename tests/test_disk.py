@@ -198,7 +198,7 @@ def test_upd_disk_writes_the_fan_diagram(tmp_path, upd):
     geo.write_text("\n".join(lines) + "\n")
     out = tmp_path / "out"
     r = upd("disk", "--geometry", str(geo), "--damper", "cylinder", "--n-blades", "6",
-            "--families", "2", "--out", str(out), "--json")  # fmt: skip
+            "--families", "2", "--cb-modes", "12", "--out", str(out), "--json")  # fmt: skip
     assert r.code == 0, r.err
     s = r.json
     stuck, free = np.array(s["fan_hz_stuck"]), np.array(s["fan_hz_free"])
@@ -206,6 +206,18 @@ def test_upd_disk_writes_the_fan_diagram(tmp_path, upd):
     assert np.all(stuck[1:, 0] > 1.05 * free[1:, 0])
     assert abs(stuck[0, 0] / free[0, 0] - 1) < 0.05
     assert_nonblank(out / "fan.png")
+    # the per-ND Craig-Bampton models: ND 1 carries both copies, its first frequency a pair
+    # just above the unreduced no-damper frequency of the fan
+    import scipy.linalg as sl
+
+    from workbench.fe.cyclic import to_hz
+    from workbench.fe.cyclic_cb import load_reduced
+
+    models = load_reduced(s["files"]["cyclic_cb_h5"])
+    assert sorted(models) == [0, 1, 2, 3] and models[1].copies == 2 and models[0].copies == 1
+    f1 = to_hz(sl.eigh(models[1].K, models[1].M, eigvals_only=True, subset_by_index=[0, 1]))
+    assert abs(f1[1] / f1[0] - 1) < 1e-9
+    assert -1e-5 < f1[0] / free[1, 0] - 1 < 1e-3  # from above; the fan rounds to 1e-3 Hz
 
 
 def test_complex_form_has_the_real_forms_eigenvalues(clamped):

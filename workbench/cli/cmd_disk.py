@@ -54,6 +54,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         default=4,
     )
+    add_value(
+        parser,
+        "--cb-modes",
+        Value("int", 0, 500),
+        "fixed-interface modes of the Craig-Bampton model of every ND (the sector without "
+        "damper, onto the platform contact nodes), written to cyclic_cb.h5; 0: none",
+        metavar="N",
+        default=0,
+    )
 
 
 def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
@@ -62,6 +71,7 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..assembly.params import load_contact_params
     from ..errors import run_on_root
     from ..fe.cyclic import assemble_sector, fan
+    from ..fe.cyclic_cb import cb_models, save_reduced
     from ..geometry.disk_build import build_disk_sector
     from ..log import stage
 
@@ -83,11 +93,17 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
 
             rec = DiskSector.load(out / "disk.h5")
     cp = load_contact_params(args.contact_file, geometry_file=args.geometry)
+    part = comm if comm.size > 1 else None
     result: dict[str, Any] = {}
-    for name, with_damper in (("free", False), ("stuck", True)):
-        with stage(ctx.timings, f"modes_{name}"):
-            cs = assemble_sector(rec, cp, with_damper=with_damper)
-            result[name] = fan(cs, args.families, comm if comm.size > 1 else None)
+    with stage(ctx.timings, "modes_free"):
+        bare = assemble_sector(rec, cp, with_damper=False)
+        result["free"] = fan(bare, args.families, part)
+    models = {}
+    if args.cb_modes > 0:
+        with stage(ctx.timings, "craig_bampton"):
+            models = cb_models(bare, args.cb_modes, part)
+    with stage(ctx.timings, "modes_stuck"):
+        result["stuck"] = fan(assemble_sector(rec, cp, with_damper=True), args.families, part)
     summary: dict[str, Any] = {
         "out": str(out),
         "damper": rec.damper,
@@ -122,7 +138,10 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
                 )
                 for k in range(result["stuck"].shape[0]):
                     w.writerow([k, *result["stuck"][k], *result["free"][k]])
-            return {"fan_png": str(png), "fan_csv": str(folder / "fan.csv")}
+            files = {"fan_png": str(png), "fan_csv": str(folder / "fan.csv")}
+            if args.cb_modes > 0:
+                files["cyclic_cb_h5"] = str(save_reduced(models, bare, folder / "cyclic_cb.h5"))
+            return files
 
         summary["files"] = ctx.write(write)
     return ctx.note_rescue(summary)

@@ -19,6 +19,7 @@ eigenvalues of ``(K_r, M_r)`` lie above the unreduced ones
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
@@ -44,6 +45,67 @@ class CyclicReduced:
     def n_boundary(self) -> int:
         """Interface DOFs: copies x n_pairs x 3, ordered (copy, pair, x/y/z)."""
         return self.copies * 3 * len(self.boundary_nodes)
+
+
+def cb_models(cs: CyclicSector, n_modes: int, comm=None) -> dict[int, CyclicReduced]:
+    """:func:`reduce_nd` for every ND 0..N/2 (shared round-robin over ``comm``'s ranks)."""
+    nds = cs.nodal_diameters()
+    rank, size = (0, 1) if comm is None else (comm.rank, comm.size)
+    mine = {k: reduce_nd(cs, k, n_modes) for k in nds[rank::size]}
+    if comm is not None and size > 1:
+        mine = {k: v for d in comm.allgather(mine) for k, v in d.items()}
+    return dict(sorted(mine.items()))
+
+
+def save_reduced(models: dict[int, CyclicReduced], cs: CyclicSector, path) -> Path:
+    """Write every ND's reduced model to one HDF5 file (groups ``nd_<k>``; SI units).
+
+    Beside them: ``rot`` (the sector rotation), ``interface_points`` (m, the platform node
+    of each pair in this sector), ``side``, ``n_blades``.
+    """
+    import h5py
+
+    from ..io import atomic_path
+
+    path = Path(path)
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as h:
+        h.attrs["n_blades"] = cs.n_blades
+        h.attrs["units"] = "K N/m, M kg, points m"
+        h["rot"] = cs.rot
+        h["interface_points"] = cs.coords[cs.platform_nodes]
+        h["side"] = cs.side
+        for k, r in models.items():
+            g = h.create_group(f"nd_{k}")
+            g["K"], g["M"] = r.K, r.M
+            g.attrs["copies"], g.attrs["n_modes"] = r.copies, r.n_modes
+            g["boundary_nodes"] = r.boundary_nodes
+    return path
+
+
+def load_reduced(path) -> dict[int, CyclicReduced]:
+    """The models written by :func:`save_reduced`, by nodal diameter."""
+    import h5py
+
+    out = {}
+    with h5py.File(path, "r") as h:
+        n_b = int(h.attrs["n_blades"])
+        side = h["side"][()]
+        for name in h:
+            if not name.startswith("nd_"):
+                continue
+            g = h[name]
+            k = int(name[3:])
+            out[k] = CyclicReduced(
+                k=k,
+                n_blades=n_b,
+                K=g["K"][()],
+                M=g["M"][()],
+                boundary_nodes=g["boundary_nodes"][()],
+                side=side,
+                copies=int(g.attrs["copies"]),
+                n_modes=int(g.attrs["n_modes"]),
+            )
+    return dict(sorted(out.items()))
 
 
 def reduce_nd(cs: CyclicSector, k: int, n_modes: int = 20) -> CyclicReduced:
