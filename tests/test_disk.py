@@ -244,6 +244,7 @@ def test_second_build_reuses_the_meshes(clamped, tmp_path):
     before = clamped.sector_msh.stat().st_mtime_ns
     again = _sector(folder)
     assert again.digest == clamped.digest and again.sector_msh.stat().st_mtime_ns == before
+    assert (folder / "sector.vtu").is_file() and (folder / "damper.vtu").is_file()
     other = _sector(tmp_path, n=7)
     assert other.digest != clamped.digest and other.n_blades == 7
     assert abs(other.stats["sector_angle_deg"] - 360 / 7) < 1e-12

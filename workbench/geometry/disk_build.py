@@ -9,6 +9,7 @@ Files written in ``out_dir``::
                    left face turned by the sector angle
     damper.msh     the damper seated in the groove between this sector's right
                    platform half and the next sector's left half
+    sector.vtu, damper.vtu   the same meshes for ParaView (quadratic tetrahedra)
     disk.h5        the :class:`DiskSector` record (contact pairs, images, ...)
 
 Physical groups of ``sector.msh`` (names are the contract with
@@ -266,6 +267,10 @@ def _build(dl: DiskLayout, params: dict, dig: str, out_dir: Path) -> DiskSector:
         digest=dig,
         stats=stats,
     )
+    from ..post.vtk_out import write_mesh_vtu
+
+    for msh in (sector_msh, damper_msh):
+        write_mesh_vtu(msh, msh.with_suffix(".vtu"))
     rec.save(out_dir / "disk.h5")
     log.info(
         "disk: %d blades, sector %d nodes, damper %d nodes, %d pairs, written to %s",
