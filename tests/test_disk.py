@@ -152,6 +152,11 @@ def test_craig_bampton_per_nodal_diameter_converges_from_above(clamped):
             "disk.n_blades",
         ),  # the sector angle overlaps the blade at its root
         (36, {"cylinder": {"radius_mm": 40.0}}, "cylinder.radius_mm"),  # damper too big
+        (
+            8,
+            {"cylinder": {"radius_mm": 27.0}, "rig": {"platform": {"top_below_tip_mm": 150.0}}},
+            "disk.n_blades",
+        ),  # the damper, low in the groove, would touch the radial blade leaning in
         (36, {"rig": {"platform": {"overhang_mm": 36.0}}}, "rig.platform.overhang_mm"),
     ],
 )
@@ -164,7 +169,9 @@ def test_bad_disk_input_names_the_parameter(n, over, param):
         make_disk_layout(gp, load_disk_params(n_blades=n))
     assert e.value.param == param
     assert "\n" not in str(e.value) and "expected" in str(e.value)
-    if param == "disk.n_blades" and n > 1:  # the smallest number of blades that fits
+    if "more blades, or a smaller damper" in str(e.value):
+        assert "radial blade" in str(e.value)
+    elif param == "disk.n_blades" and n > 1:  # the smallest number of blades that fits
         assert e.value.allowed.endswith("<= disk.n_blades <= 400")
 
 
