@@ -15,8 +15,9 @@ from tests.conftest import ROOT, assert_nonblank, run_upd
 from workbench.errors import InputError
 from workbench.post.fidelity import Setting
 from workbench.post.pareto import pareto_front, pick_cheapest
-from workbench.studies.fidelity_plan import propose_combination
-from workbench.studies.spec import parse_harmonics, resolve
+from workbench.studies.engine.spec import resolve
+from workbench.studies.kinds.fidelity.ladders import propose_combination
+from workbench.studies.kinds.fidelity.options import parse_harmonics
 
 # ---- Pareto front ---------------------------------------------------------------------------
 
@@ -186,8 +187,8 @@ def test_study_help_mentions_the_fidelity_options():
 
 
 def test_the_study_file_resolves():
-    from workbench.studies.fidelity_plan import plan_settings
-    from workbench.studies.spec import load_study
+    from workbench.studies.engine.spec import load_study
+    from workbench.studies.kinds.fidelity.ladders import plan_settings
 
     spec = load_study(ROOT / "studies" / "fidelity.toml", {"tolerance": "1%"})
     assert spec.kind == "fidelity" and spec.tolerance == 1.0
@@ -231,8 +232,8 @@ TOL = "3%"
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
-    from workbench.studies.fidelity import run_fidelity
-    from workbench.studies.spec import load_study
+    from workbench.studies.engine.spec import load_study
+    from workbench.studies.kinds.fidelity.compute import run_fidelity
 
     d = tmp_path_factory.mktemp("fid")
     (d / "tiny.toml").write_text(TINY)
@@ -469,8 +470,8 @@ def test_fidelity_nonlinear_mode_entry(tmp_path):
     and its time is the base model's plus the backbone's."""
     from workbench.hbm.nlmode_branch import NlModeBranch
     from workbench.hbm.synthesis import synthesize
-    from workbench.studies.fidelity import run_fidelity
-    from workbench.studies.spec import load_study
+    from workbench.studies.engine.spec import load_study
+    from workbench.studies.kinds.fidelity.compute import run_fidelity
 
     (tmp_path / "tiny_nlm.toml").write_text(TINY_NLM)
     spec = load_study(tmp_path / "tiny_nlm.toml", {"tolerance": "3%"})

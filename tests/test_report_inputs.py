@@ -8,8 +8,8 @@ import pytest
 
 from workbench.post.inputs import used_inputs
 from workbench.render.report import render_html
-from workbench.studies.outputs import headline
-from workbench.studies.spec import load_study
+from workbench.studies.engine.outputs import headline
+from workbench.studies.engine.spec import load_study
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -8,9 +8,8 @@ import pytest
 
 from tests.conftest import ROOT, run_upd
 from workbench.errors import InputError
-from workbench.studies.plan import plan
-from workbench.studies.spec import load_study, resolve
-from workbench.study_options import OPTIONS
+from workbench.studies.engine.plan import plan
+from workbench.studies.engine.spec import OPTIONS, load_study, resolve
 
 
 def test_cli_overrides_file_and_records_origin(tmp_path):
@@ -135,7 +134,7 @@ def test_the_case_key_covers_every_source_that_shapes_a_curve(monkeypatch):
     the nonlinear modes), the assembly and the model pipeline is read into a case's
     cache key: editing any of them recomputes the cases."""
     import workbench.io as wio
-    from workbench.studies.plan import NLMODE_SOURCES, solver_code_version
+    from workbench.studies.engine.plan import NLMODE_SOURCES, solver_code_version
 
     read = set()
     real = wio.file_digest

@@ -1,14 +1,14 @@
-"""The study options table and the named robustness methods and hard cases (plain data).
+"""The study options every kind shares (plain data), and the :class:`Option` record.
 
-Every option of ``upd study`` is one :class:`Option` in :data:`OPTIONS`
-(name, type, default, help, allowed values, and the physical range of a
-real rig with its reason); :mod:`workbench.studies.spec`
-turns them into a :class:`~workbench.studies.spec.StudySpec` from a TOML
-file and the command line, and the figures read an option's help text for
-their axis labels. The robustness study's solution methods
-(:data:`METHODS`) and hard cases (:data:`CASES`) are named in
-:mod:`workbench.hard_cases` and listed here by the options that name them.
-Nothing here computes: it imports no study.
+Every option of ``upd study`` is one :class:`Option` declared once (name,
+type, default, help, allowed values, unit, and the physical range of a real
+rig with its reason): the options every study kind reads are in
+:data:`OPTIONS` here, a kind's own options in its folder
+(``workbench/studies/kinds/<kind>/options.py``, reached through the kind
+registry). :mod:`workbench.studies.engine.spec` turns them into a
+:class:`~workbench.studies.engine.spec.StudySpec` from a TOML file and the
+command line, and the figures read an option's help text for their axis
+labels. Nothing here computes: it imports no study.
 """
 
 from __future__ import annotations
@@ -17,7 +17,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from .geometry.params import DAMPERS
-from .hard_cases import CASES, METHODS
 from .limits import (
     BAND_MAX_HZ,
     BAND_WHY,
@@ -29,22 +28,13 @@ from .limits import (
     K_FACE_WHY,
     K_LINE_N_PER_M2,
     K_LINE_WHY,
-    UQ_THRESHOLD_MAX_MM,
-    UQ_THRESHOLD_WHY,
 )
 
-# the robustness study's names, for the options that list them
-ROBUSTNESS_METHODS = tuple(METHODS)
-ROBUSTNESS_CASES = tuple(CASES)
 __all__ = [
     "BY_NAME",
-    "KINDS",
     "OPTIONS",
     "Option",
 ]
-
-
-KINDS = ("comparison", "sweep", "fidelity", "robustness", "uncertainty")
 
 
 @dataclass(frozen=True)
@@ -84,14 +74,8 @@ OPTIONS: tuple[Option, ...] = (
         "stiffness, bands, uq-threshold) for a numerical experiment; the numerical limits stay",
         "study",
     ),
-    Option(
-        "kind",
-        "str",
-        "comparison",
-        "what the report shows: " + ", ".join(KINDS),
-        "study",
-        choices=KINDS,
-    ),
+    # its choices and help come from the kind registry (workbench/studies/kinds/)
+    Option("kind", "str", "comparison", "what the study computes", "study"),
     Option("dampers", "strs", list(DAMPERS), "dampers to compare", "cases", choices=DAMPERS),
     Option(
         "phases",
@@ -316,7 +300,7 @@ OPTIONS: tuple[Option, ...] = (
         False,
         "comparison study: also one nonlinear mode "
         "(backbone) per damper and family, the forced responses synthesised from it and "
-        "their check against the curves (workbench/studies/nlmodes.py)",
+        "their check against the curves (workbench/studies/engine/nlmodes.py)",
         "solver",
     ),
     Option(
@@ -325,7 +309,7 @@ OPTIONS: tuple[Option, ...] = (
         False,
         "also write cases/<case>_peak_field.vtu: the displacement at each curve's peak on "
         "the full rig and damper meshes (ParaView; about one reduction's eigen solve per "
-        "damper, workbench/studies/fields.py)",
+        "damper, workbench/studies/engine/fields.py)",
         "solver",
     ),
     # sweeps and the fidelity/robustness studies
@@ -338,220 +322,6 @@ OPTIONS: tuple[Option, ...] = (
         optional=True,
     ),
     Option("sweep-values", "floats", [], "values of the swept option", "sweep"),
-    Option(
-        "tolerance",
-        "percent",
-        None,
-        "accepted error, percent ('1' or '1%%'): pick the "
-        "cheapest settings meeting it (fidelity studies)",
-        "fidelity",
-        lo=0.0,
-        lo_open=True,
-        hi=100.0,
-        optional=True,
-    ),
-    # ---- fidelity study options (kind = "fidelity"; workbench/studies/fidelity.py) ----
-    Option(
-        "knobs",
-        "strs",
-        ["mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"],
-        "knobs a fidelity study varies, one at a time about the base setting (the study's "
-        "own mesh-size, modes, ...)",
-        "fidelity",
-        choices=("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"),
-    ),
-    Option(
-        "levels-mesh-size",
-        "floats",
-        [14.0, 11.0, 9.0, 7.0],
-        "fidelity: global mesh sizes to try, mm (finest = smallest)",
-        "fidelity",
-        lo=0.0,
-        lo_open=True,
-    ),
-    Option(
-        "levels-modes",
-        "ints",
-        [4, 8, 12, 24, 40],
-        "fidelity: fixed-interface modes per body to try",
-        "fidelity",
-        lo=0,
-        hi=400,
-    ),
-    Option(
-        "levels-harmonics",
-        "strs",
-        ["1", "0-1", "0-3", "0-5", "0-7"],
-        "fidelity: harmonic sets to try, each 'a-b' (a range) or 'h+h+...' (a list)",
-        "fidelity",
-    ),
-    Option(
-        "levels-nt",
-        "ints",
-        [16, 32, 64, 128, 256, 512],
-        "fidelity: AFT time samples per period to try",
-        "fidelity",
-        lo=4,
-        hi=8192,
-    ),
-    Option(
-        "levels-points-per-line",
-        "ints",
-        [5, 11, 23, 33, 45],
-        "fidelity: contact points per line to try",
-        "fidelity",
-        lo=2,
-        hi=400,
-    ),
-    Option(
-        "levels-rigid-damper",
-        "strs",
-        ["rigid", "flexible"],
-        "fidelity: damper models to try (finest = flexible)",
-        "fidelity",
-        choices=("rigid", "flexible"),
-    ),
-    # ---- robustness study options (kind = "robustness"; workbench/studies/robustness.py) ----
-    Option(
-        "methods",
-        "strs",
-        list(ROBUSTNESS_METHODS),
-        "solution methods of a robustness "
-        "study (named solver variants; the first is the reference): "
-        + ", ".join(ROBUSTNESS_METHODS),
-        "robustness",
-        choices=ROBUSTNESS_METHODS,
-    ),
-    Option(
-        "hard-cases",
-        "strs",
-        list(ROBUSTNESS_CASES),
-        "hard cases of a robustness study: " + ", ".join(ROBUSTNESS_CASES),
-        "robustness",
-        choices=ROBUSTNESS_CASES,
-    ),
-    Option(
-        "peak-tolerance",
-        "float",
-        1.0,
-        "robustness: a method that converges but whose "
-        "peak amplitude differs from the first method's by more than this, percent, is a "
-        "wrong answer",
-        "robustness",
-        lo=0.0,
-        lo_open=True,
-        hi=100.0,
-    ),
-    Option(
-        "time-check",
-        "bool",
-        True,
-        "robustness: check the harmonic balance against time "
-        "integration at its suspect points (small models)",
-        "robustness",
-    ),
-    # ---- uncertainty study options (kind = "uncertainty"; workbench/studies/uncertainty.py) --
-    # a distribution is "uniform LO HI", "normal MEAN SD [LO HI]" or
-    # "lognormal MEDIAN SIGMA_LN [LO HI]" (bounds truncate); cf, kt, kn are factors on the
-    # nominal value (study option or geometry/contact.toml), mu and damping absolute values,
-    # seat-tilt the misalignment of one side's seat, deg
-    Option(
-        "uq-inputs",
-        "strs",
-        ["mu", "cf", "kt", "kn", "damping", "seat-tilt"],
-        "uncertainty: the inputs that vary (the others stay nominal)",
-        "uncertainty",
-        choices=("mu", "cf", "kt", "kn", "damping", "seat-tilt"),
-    ),
-    Option(
-        "uq-mu",
-        "str",
-        "normal 0.5 0.1 0.25 0.75",
-        "uncertainty: friction coefficient",
-        "uncertainty",
-    ),
-    Option(
-        "uq-cf",
-        "str",
-        "normal 1 0.1 0.7 1.3",
-        "uncertainty: factor on the nominal centrifugal force",
-        "uncertainty",
-    ),
-    Option(
-        "uq-kt",
-        "str",
-        "lognormal 1 0.5 0.25 4",
-        "uncertainty: factor on the nominal tangential contact stiffness (line and face)",
-        "uncertainty",
-    ),
-    Option(
-        "uq-kn",
-        "str",
-        "lognormal 1 0.5 0.25 4",
-        "uncertainty: factor on the nominal normal contact stiffness (line and face)",
-        "uncertainty",
-    ),
-    Option(
-        "uq-damping",
-        "str",
-        "lognormal 0.002 0.3 0.001 0.004",
-        "uncertainty: modal damping ratio",
-        "uncertainty",
-    ),
-    Option(
-        "uq-seat-tilt",
-        "str",
-        "normal 0 0.01 -0.03 0.03",
-        "uncertainty: seat "
-        "misalignment of one side, deg (tilts the preload along the line or face; "
-        "opens one end when large)",
-        "uncertainty",
-    ),
-    Option(
-        "uq-samples",
-        "int",
-        16,
-        "uncertainty: base samples N per damper and family "
-        "(Saltelli design: N (D + 2) cases; a power of 2; a larger N reuses a smaller)",
-        "uncertainty",
-        lo=2,
-        hi=1 << 20,
-        power_of_2=True,
-    ),
-    Option(
-        "uq-seed",
-        "int",
-        2026,
-        "uncertainty: seed of the scrambled Sobol sequence",
-        "uncertainty",
-        lo=0,
-        hi=2**31 - 1,
-    ),
-    Option(
-        "uq-threshold",
-        "float",
-        None,
-        "uncertainty: peak amplitude threshold, mm (the "
-        "report gives the probability of exceeding it; None: per family, 1.2 x the "
-        "median peak of every damper's samples)",
-        "uncertainty",
-        lo=0.0,
-        lo_open=True,
-        optional=True,
-        unit="mm",
-        soft_hi=UQ_THRESHOLD_MAX_MM,
-        why=UQ_THRESHOLD_WHY,
-    ),
-    Option(
-        "uq-schedule",
-        "str",
-        "dynamic",
-        "uncertainty: how samples spread over MPI ranks: "
-        "dynamic (a shared counter, each rank takes the next sample when free) or static "
-        "(round-robin, for comparison)",
-        "uncertainty",
-        choices=("dynamic", "static"),
-    ),
 )
 
 

@@ -4,7 +4,7 @@ Every study kind, the API and the CLI get their models here: :func:`prepare_mode
 meshes, reduces and assembles the model of a case (each stage cached on disk
 under ``out/cache``), :func:`band_for` picks its frequency band and
 :func:`solve_case` computes its frequency response. A *case* is any object
-with the attributes of :class:`workbench.studies.plan.Case` (``damper``,
+with the attributes of :class:`workbench.studies.engine.plan.Case` (``damper``,
 ``phase_deg``, ``force_n``, ``variant``, ``name``, ``digest`` and the option
 values in ``settings``); this package never imports the studies.
 """
@@ -19,7 +19,7 @@ from typing import Any
 from ..io import digest
 from ..post.results import CaseResult
 
-Case = Any  # a workbench.studies.plan.Case (see the module docstring)
+Case = Any  # a workbench.studies.engine.plan.Case (see the module docstring)
 
 
 @dataclass
@@ -35,7 +35,7 @@ class PreparedModel:
     contact_params: Any = None
     # stage -> what it cost when it was computed, for the stages reused from the cache
     cached: dict[str, float] = field(default_factory=dict)
-    # the reduced models ("rig", "damper"), for full-mesh fields (studies/fields.py)
+    # the reduced models ("rig", "damper"), for full-mesh fields (studies/engine/fields.py)
     reduced: dict[str, Any] = field(default_factory=dict)
 
 

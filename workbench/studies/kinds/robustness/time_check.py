@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import SolveError
-from ..io import digest, write_json
+from ....errors import SolveError
+from ....io import digest, write_json
 
 log = logging.getLogger(__name__)
 
@@ -50,13 +50,13 @@ class TimeModel:
 
 
 def _two_dof():
-    from ..hbm.examples import two_dof_contact
+    from ....hbm.examples import two_dof_contact
 
     return two_dof_contact(zeta=0.005)
 
 
 def _sdof_light():
-    from ..hbm.examples import sdof_jenkins
+    from ....hbm.examples import sdof_jenkins
 
     return sdof_jenkins(zeta=1e-4)
 
@@ -107,11 +107,11 @@ def suspect_points(freq_hz, amp, stability, status, max_points: int = 4) -> list
 
 def time_check(name: str, tm: TimeModel) -> dict[str, Any]:
     """HBM branch of a small model and time integrations started on it at its suspect points."""
-    from ..hbm.balance import HarmonicBalance
-    from ..hbm.continuation import frequency_response
-    from ..hbm.fourier import Fourier
-    from ..hbm.options import SolverOptions
-    from ..hbm.timeint import time_response
+    from ....hbm.balance import HarmonicBalance
+    from ....hbm.continuation import frequency_response
+    from ....hbm.fourier import Fourier
+    from ....hbm.options import SolverOptions
+    from ....hbm.timeint import time_response
 
     ex = tm.build()
     # Hill's method at every point: the time integrations check its verdicts themselves
@@ -230,8 +230,8 @@ def time_checks(
     cache_dir: Path | None, *, force: bool = False, names: list[str] | None = None
 ) -> list[dict[str, Any]]:
     """:func:`time_check` of every model of :data:`TIME_MODELS` (cached), with a progress bar."""
-    from ..log import progress
-    from .plan import _SOLVER_CODE
+    from ....log import progress
+    from ...engine.plan import _SOLVER_CODE
 
     out = []
     for name in progress(

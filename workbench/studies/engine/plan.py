@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..io import digest
+from ...io import digest
 from .spec import StudySpec
 
 MODEL_KEYS = (
@@ -98,9 +98,9 @@ def solver_code_version() -> str:
     solve) or this runner recomputes the cases (the meshes and reduced
     models have their own keys and stay). Sub-packages count.
     """
-    from ..io import code_version
+    from ...io import code_version
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]  # workbench/
     parts = [code_version(root / pkg) for pkg in ("contact", "assembly")]
     # the nonlinear modes (NLMODE_SOURCES) do not shape a forced response
     hbm_dir = root / "hbm"
@@ -110,15 +110,15 @@ def solver_code_version() -> str:
         if p.name not in NLMODE_SOURCES
     )
     parts.insert(1, code_version(hbm_dir, hbm))
-    parts.append(code_version(root / "studies", ("plan.py", "runner.py")))
+    parts.append(code_version(root / "studies" / "engine", ("plan.py", "runner.py")))
     parts.append(code_version(root / "pipeline"))
     return digest(parts, 12)
 
 
 def input_files_digest(damper: str, geometry: Any) -> str:
     """A digest of the parameter files a model of ``damper`` is built from."""
-    from ..assembly.params import DEFAULT_FILE as CONTACT_FILE
-    from ..geometry.params import default_files
+    from ...assembly.params import DEFAULT_FILE as CONTACT_FILE
+    from ...geometry.params import default_files
 
     paths = [*default_files(damper), CONTACT_FILE]
     if geometry:
@@ -128,7 +128,7 @@ def input_files_digest(damper: str, geometry: Any) -> str:
 
 @functools.lru_cache(maxsize=64)
 def _files_digest(paths: tuple[str, ...]) -> str:
-    from ..config import read_toml
+    from ...config import read_toml
 
     parts = []
     for p in paths:  # the parsed values: editing a comment recomputes nothing

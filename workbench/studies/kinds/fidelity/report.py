@@ -2,7 +2,7 @@
 
 Writes the CSV/JSON tables and the per-knob and Pareto charts of a finished
 fidelity study and returns the report's headline, timings and sections;
-the study (``workbench.studies.fidelity``) writes them into manifest.json
+the study (``workbench.studies.kinds.fidelity.compute``) writes them into manifest.json
 and report.html. Takes the plain :class:`~workbench.post.fidelity.Setting`
 records and the study's JSON summary.
 """
@@ -12,8 +12,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ..io import write_json
-from ..post.fidelity import (
+from ....io import write_json
+from ....post.fidelity import (
     KNOBS,
     NO_LADDER,
     QUANTITIES,
@@ -24,7 +24,7 @@ from ..post.fidelity import (
     level_label,
     limit_uncertainty_pct,
 )
-from ..post.tables import write_rows_csv
+from ....post.tables import write_rows_csv
 
 
 def write_csv(path: Path, rows: list[dict[str, Any]], cols: list[str] | None = None) -> Path:
@@ -60,7 +60,7 @@ def fidelity_outputs(
     wall_s: float = 0.0,
 ) -> tuple[list[str], dict[str, float], list[dict[str, Any]]]:
     """Write the tables (CSV, JSON) and charts; return the report's (head, timings, sections)."""
-    from .fidelity_figures import plot_knob, plot_pareto
+    from .figures import plot_knob, plot_pareto
 
     tables, figs = out / "tables", out / "figures"
     rows = summary["settings"]

@@ -32,9 +32,9 @@ log = logging.getLogger(__name__)
 
 def peak_coordinates(case, prep) -> tuple[np.ndarray, dict[str, int]]:
     """(nh, n) harmonics of the generalised coordinates at the case's peak, and row indices."""
-    from ..hbm.balance import HarmonicBalance
-    from ..hbm.fourier import Fourier
-    from ..hbm.options import SolverOptions
+    from ...hbm.balance import HarmonicBalance
+    from ...hbm.fourier import Fourier
+    from ...hbm.options import SolverOptions
 
     b, i = case.branch, case.peak_index
     opts = SolverOptions()
@@ -59,7 +59,7 @@ def peak_coordinates(case, prep) -> tuple[np.ndarray, dict[str, int]]:
 
 
 def field_path(out: Path, case) -> Path:
-    from ..post.results import case_id
+    from ...post.results import case_id
 
     return Path(out) / "cases" / f"{case_id(case)}_peak_field.vtu"
 
@@ -67,7 +67,7 @@ def field_path(out: Path, case) -> Path:
 def missing_fields(cases: list, out: Path, comm=None) -> list[int]:
     """Indices of the planned cases whose field file is absent or stale (rank 0 reads the
     files, every rank of ``comm`` gets the list)."""
-    from ..post.vtk_out import has_digest
+    from ...post.vtk_out import has_digest
 
     missing = None
     if comm is None or comm.rank == 0:
@@ -92,8 +92,8 @@ def write_study_fields(
     """
     from mpi4py import MPI
 
-    from ..fe.expand import expand_body
-    from ..log import progress_bar
+    from ...fe.expand import expand_body
+    from ...log import progress_bar
 
     comm = MPI.COMM_WORLD if comm is None else comm
     out = Path(out)
@@ -119,7 +119,7 @@ def write_study_fields(
 
 
 def _model_fields(out: Path, cases: list, prep, expand_body, comm) -> list[Path]:
-    from ..post.vtk_out import write_case_field
+    from ...post.vtk_out import write_case_field
 
     n_rig = prep.assembled.n_rig
     cols, meta = [], []

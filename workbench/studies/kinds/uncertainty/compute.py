@@ -35,7 +35,7 @@ digest plus the seat tilt and the imperfection model's source: a killed
 study resumes, ``--force`` recomputes. The FE reduction and the coupling
 matrix are built once per damper (``pipeline.prepare_model`` on the nominal
 inputs); a sample only re-makes the contact parameters, the preload vector
-(the seat tilt, :mod:`workbench.studies.imperfection`) and the modal
+(the seat tilt, :mod:`workbench.studies.kinds.uncertainty.imperfection`) and the modal
 damping: nothing is re-meshed or re-reduced.
 
 MPI: models are prepared on every rank together, then the samples are
@@ -56,10 +56,10 @@ from typing import Any
 
 import numpy as np
 
-from ..io import write_json
-from ..log import bars_enabled
-from ..post.results import CaseResult, family_name
-from ..post.uncertainty import (
+from ....io import write_json
+from ....log import bars_enabled
+from ....post.results import CaseResult, family_name
+from ....post.uncertainty import (
     INPUT_LABELS,
     QUANTITIES,
     Design,
@@ -76,14 +76,14 @@ from ..post.uncertainty import (
     statistics,
     stats_rows,
 )
-from .plan import make_case
-from .schedule import (
+from ...engine.plan import make_case
+from ...engine.schedule import (
     run_tasks,
     schedule_efficiency,
     study_comm,
 )
-from .spec import StudySpec
-from .uq_samples import (
+from ...engine.spec import StudySpec
+from .samples import (
     Sample,
     base_settings,
     nominal_contact,
@@ -101,8 +101,8 @@ log = logging.getLogger(__name__)
 
 def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) -> dict[str, Any]:
     """Compute every sample (resuming from ``out``), then statistics, indices and report."""
-    from ..pipeline import prepare_model, solve_case
-    from .runner import case_done
+    from ....pipeline import prepare_model, solve_case
+    from ...engine.runner import case_done
 
     out = Path(out)
     comm = study_comm()
@@ -370,7 +370,7 @@ def write_h5(
 
     import h5py
 
-    from ..io import atomic_path
+    from ....io import atomic_path
 
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as h:
         d = h.create_group("design")
@@ -419,8 +419,8 @@ def write_uncertainty_outputs(
     timings: dict[str, float],
 ) -> None:
     """Tables, HDF5, figures, ``uncertainty.json``, manifest and report."""
-    from ..post.tables import write_rows_csv
-    from .outputs import write_manifest_and_report
+    from ....post.tables import write_rows_csv
+    from ...engine.outputs import write_manifest_and_report
 
     tables = out / "tables"
     write_rows_csv(tables / "uncertainty_answer.csv", answer_rows(a))
@@ -453,18 +453,18 @@ def write_uncertainty_outputs(
     write_json(out / "uncertainty.json", {"analysis": a, "schedule": sched, "timings": timings})
     figures: list[dict[str, str]] = []
     try:
-        from ..render.uncertainty_figures import uncertainty_figures
+        from .figures import uncertainty_figures
 
         figures = uncertainty_figures(out / "figures", design, results, a)
     except ImportError:  # the figure module is optional only while it is being built
         pass
-    from ..render.uncertainty_report import uncertainty_sections
+    from .report import uncertainty_sections
 
     sections = uncertainty_sections(spec.forces[0], design, a, sched, figures)
     write_manifest_and_report(out, spec, "uncertainty study,", headline(a), timings, sections)
 
 
-# moved to post/uncertainty.py and studies/schedule.py; kept importable from here
+# moved to post/uncertainty.py and studies/engine/schedule.py; kept importable from here
 __all__ = [
     "analyse",
     "run_uncertainty",

@@ -14,7 +14,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..io import digest, write_json
+from ...io import digest, write_json
 
 
 def study_pictures(cases, prepared: dict, out: Path, comm, cached_costs: dict) -> bool:
@@ -23,7 +23,7 @@ def study_pictures(cases, prepared: dict, out: Path, comm, cached_costs: dict) -
     ``cached_costs`` gets what the reused ones cost when drawn. Returns True
     when any was drawn. Collective under MPI.
     """
-    from ..pipeline import contact_params_for, load_geometry
+    from ...pipeline import contact_params_for, load_geometry
 
     firsts = [c for i, c in enumerate(cases) if c.damper not in {x.damper for x in cases[:i]}]
 
@@ -64,7 +64,7 @@ def model_pictures(geometry, contact_params, out: Path, *, comm=None) -> float |
     """
     import json
 
-    from ..fe.modes import compute_modes
+    from ...fe.modes import compute_modes
 
     t0 = time.perf_counter()
     damper = geometry.damper
@@ -89,8 +89,8 @@ def model_pictures(geometry, contact_params, out: Path, *, comm=None) -> float |
         import shutil
         import tempfile
 
-        from ..render.modes import render_modes
-        from ..render.scene import render_scene
+        from ...render.modes import render_modes
+        from ...render.scene import render_scene
 
         figs.mkdir(parents=True, exist_ok=True)
         render_scene(geometry, figs / f"model_{damper}.png", title=f"rig with the {damper} damper")

@@ -34,12 +34,12 @@ from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
-from ..io import write_json
-from ..log import bars_enabled
-from ..pipeline import PreparedModel, prepare_model, solve_case
-from ..post.results import CaseResult, StudyResults
-from .outputs import write_outputs
+from ...errors import InputError
+from ...io import write_json
+from ...log import bars_enabled
+from ...pipeline import PreparedModel, prepare_model, solve_case
+from ...post.results import CaseResult, StudyResults
+from .outputs import check_failures, write_outputs
 from .plan import Case, plan
 from .prefetch import prefetch_study
 from .schedule import world_comm
@@ -55,7 +55,7 @@ def study_lock(out: Path) -> Iterator[None]:
     A second ``upd study`` on the same folder is refused at once with one
     line (exit 2); a lock left by a killed run is removed (pid check).
     """
-    from ..io import folder_lock
+    from ...io import folder_lock
 
     comm = world_comm()
     if comm is None:
@@ -75,6 +75,32 @@ def study_lock(out: Path) -> Iterator[None]:
         if err is not None:
             raise InputError(*err)
         yield
+
+
+def run_forced_responses(spec: StudySpec, out: Path, *, force: bool = False) -> dict[str, Any]:
+    """A comparison or sweep study: :func:`run_study`, then its JSON summary (what
+    ``upd study --json`` prints); a failed case raises after the outputs are written."""
+    results = run_study(spec, out, force=force)
+    summary = {
+        "study": spec.name,
+        "kind": spec.kind,
+        "out": str(out),
+        "report": str(Path(out) / "report.html"),
+        "n_cases": len(results.cases),
+        "n_computed": results.extras.get("n_computed"),
+        "n_reused": results.extras.get("n_reused"),
+        "peak_not_reached": [c.case_id for c in results.uncovered()],
+        "timings_s": {k: round(v, 2) for k, v in results.timings.items()},
+        # the cases' schedule: each rank's busy time and busy / (ranks x wall)
+        "schedule": {
+            k: (round(v, 3) if isinstance(v, float) else v)
+            for k, v in (results.extras.get("schedule") or {}).items()
+            if k != "records"
+        },
+        "cases": results.summaries(),
+    }
+    check_failures(results, summary)
+    return summary
 
 
 def remove_stale_parts(out: Path) -> int:

@@ -26,9 +26,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .common import pyplot, save_figure, styled
-from .palette import force_colors
-from .study_style import _EXTRA_COLORS, FIGSIZE
+from ....render.common import pyplot, save_figure, styled
+from ....render.palette import force_colors
+from ....render.study_style import _EXTRA_COLORS, FIGSIZE
 
 ERR_FLOOR = 1e-4  # percent
 QUANTITY_TITLES = {
@@ -190,7 +190,7 @@ def plot_knob(
 
 def pareto_indices(times: Sequence[float], errs: Sequence[float | None]) -> list[int]:
     """Non-dominated (time, error) points, cheapest first (see post.pareto.pareto_front)."""
-    from ..post.pareto import pareto_front
+    from ....post.pareto import pareto_front
 
     return pareto_front(list(zip(times, errs, strict=True)))
 

@@ -1,7 +1,7 @@
 """The robustness study's report sections: the failure map, how methods failed, HBM vs time.
 
 Plain inputs: the classified cell records and time-check records of
-``workbench.studies.robustness`` and the method descriptions.
+``workbench.studies.kinds.robustness.compute`` and the method descriptions.
 """
 
 from __future__ import annotations

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..io import digest
+from ...io import digest
 from .plan import Case, plan
 from .spec import StudySpec
 
@@ -41,9 +41,9 @@ SUB = "nlmodes"
 
 def backbone_key(case: Case, relative_range: tuple[float, float], n_steps: int, forces=None) -> str:
     """Cache key of one backbone: the model, the family, the balance settings, the code."""
-    from ..io import code_version
+    from ...io import code_version
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]  # workbench/
     s = case.settings
     return digest(
         {
@@ -74,8 +74,8 @@ def family_backbone(
     forces=None,
 ):
     """The backbone of ``case``'s family on a prepared model, with its excitation and band."""
-    from ..hbm.nlmodes import nonlinear_mode, pick_mode
-    from ..pipeline import band_for
+    from ...hbm.nlmodes import nonlinear_mode, pick_mode
+    from ...pipeline import band_for
 
     s = case.settings
     band = band_for(prep, case)
@@ -120,10 +120,10 @@ def study_backbones(
     not in ``prepared`` are prepared from the study's FE cache. Rank 0 only
     under MPI (the others return empty results).
     """
-    from ..hbm.nlmode_branch import NlModeBranch
-    from ..hbm.synthesis import synthesize
-    from ..pipeline import prepare_model
-    from ..post.results import CaseResult, family_name
+    from ...hbm.nlmode_branch import NlModeBranch
+    from ...hbm.synthesis import synthesize
+    from ...pipeline import prepare_model
+    from ...post.results import CaseResult, family_name
 
     out = Path(out)
     cases = plan(spec) if cases is None else cases
@@ -165,7 +165,7 @@ def study_backbones(
         )
         nm.timings["wall"] = time.perf_counter() - t0
         nm.save(h5)
-        from ..io import atomic_path
+        from ...io import atomic_path
 
         with atomic_path(npz) as tmp, open(tmp, "wb") as fh:
             np.savez(fh, f1=f1, band=np.asarray(band, float))
@@ -291,10 +291,10 @@ def cost_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
 
 def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
     """Report sections for the backbones and the synthesis check (figures, tables, text)."""
-    from ..hbm.nlmode_branch import NlModeBranch
-    from ..post.results import CaseResult
-    from ..post.tables import write_rows_csv
-    from ..render.nlmode_figures import plot_backbones, plot_synthesis, plot_synthesis_errors
+    from ...hbm.nlmode_branch import NlModeBranch
+    from ...post.results import CaseResult
+    from ...post.tables import write_rows_csv
+    from ...render.nlmode_figures import plot_backbones, plot_synthesis, plot_synthesis_errors
 
     out = Path(out)
     if not res or not res.get("backbones"):
@@ -389,7 +389,7 @@ def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
     for b in res["backbones"]:
         rs = [r for r in rows if r["label"] == b["label"]]
         nm = bbs[b["label"]]
-        from ..hbm.synthesis import synthesize
+        from ...hbm.synthesis import synthesize
 
         with np.load(out / b["file"].replace(".h5", ".npz")) as z:
             f1, band = z["f1"], tuple(float(v) for v in z["band"])
@@ -494,10 +494,10 @@ def fidelity_entry(comp, base, ref, out: str | Path):
     flags itself not valid keeps its errors (the chart shows what it costs
     to trust it anyway) and says so in ``failed``-free ``members``.
     """
-    from ..hbm.nlmode_branch import NlModeBranch
-    from ..hbm.synthesis import synthesize
-    from ..pipeline import prepare_model
-    from ..post.fidelity import QUANTITIES, Setting, condition_name
+    from ...hbm.nlmode_branch import NlModeBranch
+    from ...hbm.synthesis import synthesize
+    from ...pipeline import prepare_model
+    from ...post.fidelity import QUANTITIES, Setting, condition_name
 
     out = Path(out)
     st = Setting("nonlinear-mode synthesis", dict(base.values), "nlmode")
@@ -523,7 +523,7 @@ def fidelity_entry(comp, base, ref, out: str | Path):
                     prep = prepare_model(c, out)
                 nm, f1, band = family_backbone(prep, c, forces=[f for _, f in comp.conditions])
                 nm.save(h5)
-                from ..io import atomic_path
+                from ...io import atomic_path
 
                 with atomic_path(npz) as tmp, open(tmp, "wb") as fh:
                     np.savez(fh, f1=f1, band=np.asarray(band, float))

@@ -1,6 +1,6 @@
 """Figures of the robustness study: the methods x cases failure map, the branches, HBM vs time.
 
-Plain inputs (the cell records of :mod:`workbench.studies.robustness`), one
+Plain inputs (the cell records of :mod:`workbench.studies.kinds.robustness.compute`), one
 PNG per function, fixed size, no time stamp. Colours: ok green, wrong
 answer orange, failed red (the map); HBM branches with their unstable
 pieces dashed, as in :mod:`.study_figures`.
@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from .common import pyplot, save_figure, styled
-from .palette import VERDICTS
-from .palette import verdict as palette_verdict
+from ....render.common import pyplot, save_figure, styled
+from ....render.palette import VERDICTS
+from ....render.palette import verdict as palette_verdict
 
 STATUS_STYLE = {
     "ok": ("#59a14f", "ok"),

@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..assembly.screen import ScreenResult, linear_pair, screen
+from ...assembly.screen import ScreenResult, linear_pair, screen
 from .plan import Case, plan
 from .spec import StudySpec
 
@@ -24,8 +24,8 @@ log = logging.getLogger(__name__)
 
 def rigid_bound_model(prep, case: Case, out: Path, comm=None):
     """The case's rig with a rigid 6-DOF damper (same contact layout and parameters)."""
-    from ..assembly.model import assemble
-    from ..fe.reduce import reduce_body
+    from ...assembly.model import assemble
+    from ...fe.reduce import reduce_body
 
     geom = prep.geometry
     s = case.settings
@@ -71,9 +71,9 @@ def screen_row(case: Case, res: ScreenResult) -> dict[str, Any]:
 
 def screen_key(case: Case, phases, f_max_n: float) -> str:
     """Cache key of a model's screen: the model, the phases, the force range, the code."""
-    from ..io import code_version, digest
+    from ...io import code_version, digest
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]  # workbench/
     return digest(
         {
             "model": case.model_digest,
@@ -82,7 +82,7 @@ def screen_key(case: Case, phases, f_max_n: float) -> str:
             "blade": case.settings["response-blade"],
             "code": [
                 code_version(root / "assembly"),
-                code_version(root / "studies", ("screening.py",)),
+                code_version(root / "studies" / "engine", ("screening.py",)),
             ],
         },
         16,
@@ -98,8 +98,8 @@ def study_screens(
     others are loaded from the FE cache (a resumed study has no prepared
     model but must show the same table). Collective under MPI.
     """
-    from ..io import write_json
-    from ..pipeline import prepare_model
+    from ...io import write_json
+    from ...pipeline import prepare_model
 
     models: dict[str, Case] = {}
     for c in cases:
@@ -139,8 +139,8 @@ def run_screen(spec: StudySpec, out: str | Path, *, comm=None) -> dict[str, Any]
     ``timings`` then holds what each model cost afterwards and ``pool`` the
     pool's figures (workers, wall seconds, seconds per task).
     """
-    from ..log import progress_bar
-    from ..pipeline import prepare_model
+    from ...log import progress_bar
+    from ...pipeline import prepare_model
 
     out = Path(out)
     cases = plan(spec)

@@ -52,10 +52,10 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
-from ..io import digest, write_json
-from ..log import bars_enabled, progress_bar
-from ..post.fidelity import (
+from ....errors import InputError
+from ....io import digest, write_json
+from ....log import bars_enabled, progress_bar
+from ....post.fidelity import (
     KNOBS,
     STAGES,
     Setting,
@@ -70,18 +70,18 @@ from ..post.fidelity import (
     relative_errors,
     setting_row,
 )
-from ..post.pareto import pareto_front, pick_cheapest
-from ..post.results import CaseResult
-from .fidelity_plan import (
+from ....post.pareto import pareto_front, pick_cheapest
+from ....post.results import CaseResult
+from ...engine.outputs import write_manifest_and_report
+from ...engine.plan import Case, make_case
+from ...engine.runner import case_done
+from ...engine.spec import StudySpec
+from .ladders import (
     _check_sampling,
     _settings_dict,
     plan_settings,
     propose_combination,
 )
-from .outputs import write_manifest_and_report
-from .plan import Case, make_case
-from .runner import case_done
-from .spec import StudySpec
 
 log = logging.getLogger(__name__)
 
@@ -132,7 +132,7 @@ class _Computer:
 
     def _model_times(self, case: Case, prep) -> dict[str, float]:
         """Compute times of the geometry and the reduction of ``case``'s model (recorded)."""
-        from ..fe.reduce import reduce_body
+        from ....fe.reduce import reduce_body
 
         g = prep.geometry.stats.get("timings_s") or {}
         t_geom = float(sum(g.values())) if g else float(prep.timings.get("geometry", 0.0))
@@ -156,7 +156,7 @@ class _Computer:
 
     def solve(self, todo: list[Case], desc: str) -> None:
         """Compute the cases ``todo`` (grouped by model), saving case and time records."""
-        from ..pipeline import prepare_model, solve_case
+        from ....pipeline import prepare_model, solve_case
 
         if not todo:
             return
@@ -233,7 +233,7 @@ class _Computer:
 
 def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> dict[str, Any]:
     """Run a fidelity study into ``out`` (resuming); return the JSON summary."""
-    from ..log import mpi_size
+    from ....log import mpi_size
 
     out = Path(out)
     t_start = time.perf_counter()
@@ -263,7 +263,7 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     for st in settings:
         st.errors = relative_errors(st, ref)
     if getattr(spec, "nonlinear_modes", False):  # the nonlinear-mode synthesis entry (nlmodes.py)
-        from .nlmodes import fidelity_entry
+        from ...engine.nlmodes import fidelity_entry
 
         settings.append(fidelity_entry(comp, settings[0], ref, out))
 
@@ -476,7 +476,7 @@ def write_fidelity_outputs(
     wall_s: float = 0.0,
 ) -> None:
     """Tables (CSV, JSON), charts, manifest.json and report.html."""
-    from ..render.fidelity_report import fidelity_outputs
+    from .report import fidelity_outputs
 
     head, timings, sections = fidelity_outputs(
         out, settings, ladders, ref, front, summary, conditions, spec.tolerance, wall_s

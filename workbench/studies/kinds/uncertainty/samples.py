@@ -20,11 +20,12 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from ..io import digest
-from ..post.uncertainty import Design, Distribution
-from .plan import Case, make_case
-from .spec import StudySpec, uq_distribution
+from ....errors import InputError
+from ....io import digest
+from ....post.uncertainty import Design, Distribution
+from ...engine.plan import Case, make_case
+from ...engine.spec import StudySpec
+from .options import uq_distribution
 
 
 def study_distributions(spec: StudySpec) -> dict[str, Distribution]:
@@ -39,7 +40,7 @@ def study_distributions(spec: StudySpec) -> dict[str, Distribution]:
 
 @functools.lru_cache(maxsize=1)
 def imperfection_code() -> str:
-    from ..io import code_version
+    from ....io import code_version
 
     return code_version(Path(__file__).resolve().parent, ("imperfection.py",))
 
@@ -56,7 +57,7 @@ class Sample:
 
 def nominal_contact(spec: StudySpec):
     """The nominal contact parameters: the study's options, else geometry/contact.toml."""
-    from ..assembly.params import load_contact_params
+    from ....assembly.params import load_contact_params
 
     return load_contact_params(
         mu=spec.mu,
@@ -150,10 +151,10 @@ def prepare_sample(base_prep, case: Case, tilt_deg: float):
     model's. With the nominal values and no tilt this is exactly the model
     ``pipeline.prepare_model`` builds for the case.
     """
-    from ..assembly.model import preloads
-    from ..contact.elements import ContactElements
-    from ..hbm.system import System
-    from ..pipeline import PreparedModel, contact_params_for
+    from ....assembly.model import preloads
+    from ....contact.elements import ContactElements
+    from ....hbm.system import System
+    from ....pipeline import PreparedModel, contact_params_for
     from .imperfection import open_share, tilted_preloads
 
     t0 = time.perf_counter()

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError
+from ...errors import InputError
 
 log = logging.getLogger(__name__)
 
@@ -102,8 +102,8 @@ def _model_label(case) -> str:
 
 def _reductions(case, geom, out: Path, rigid_bound: bool, force: bool) -> list[Task]:
     """The reduction tasks of a model whose geometry exists (none when all are cached)."""
-    from ..fe.reduce import model_digest, model_path
-    from ..reduced import ReducedModel
+    from ...fe.reduce import model_digest, model_path
+    from ...reduced import ReducedModel
 
     s = case.settings
     fe_dir = out / "cache" / "fe"
@@ -142,7 +142,7 @@ def plan_tasks(
     Models that share their meshes (a sweep of mu or CF) or a reduced body
     share the task; ``seen`` collects the keys planned.
     """
-    from ..pipeline import geometry_dir
+    from ...pipeline import geometry_dir
 
     seen = set() if seen is None else seen
     models: dict[str, Any] = {}
@@ -166,8 +166,8 @@ def run_task(kind: str, case, out: str, force: bool, comm=None) -> float:
 
     ``comm``: the ranks doing it (``MPI.COMM_SELF`` for a rank alone under mpirun).
     """
-    from ..fe.reduce import reduce_body
-    from ..pipeline import load_geometry
+    from ...fe.reduce import reduce_body
+    from ...pipeline import load_geometry
 
     t0 = time.perf_counter()
     geom = load_geometry(case, Path(out), comm)
@@ -224,8 +224,8 @@ def _init_worker(level: int) -> None:
     import dolfinx.fem.petsc  # noqa: F401
     import gmsh  # noqa: F401
 
-    from .. import pipeline  # noqa: F401
-    from ..fe import craig_bampton, reduce  # noqa: F401
+    from ... import pipeline  # noqa: F401
+    from ...fe import craig_bampton, reduce  # noqa: F401
 
 
 def prefetch(cases, out: str | Path, *, rigid_bound: bool = False, force: bool = False) -> dict:
@@ -236,7 +236,7 @@ def prefetch(cases, out: str | Path, *, rigid_bound: bool = False, force: bool =
     (``workers`` 0 when the pool was not used: mpirun, ``UPD_WORKERS=1``, or
     fewer than two tasks).
     """
-    from ..log import mpi_size, progress_bar
+    from ...log import mpi_size, progress_bar
 
     out = Path(out)
     t_start = time.perf_counter()
@@ -507,15 +507,15 @@ def prefetch_ranks(cases, out, comm, *, rigid_bound: bool = False, force: bool =
 def _on_root(comm, fn):
     """``fn()`` on rank 0, its result on every rank; an error there is raised on every rank
     (:func:`workbench.errors.run_on_root`)."""
-    from ..errors import run_on_root
+    from ...errors import run_on_root
 
     return comm.bcast(run_on_root(comm, fn, "planning the models"), root=0)
 
 
 def cached_geometry_of(case, out: Path):
     """The finished geometry record of a case's model, or None (no meshing)."""
-    from ..geometry.build import cached_geometry
-    from ..pipeline import geometry_dir, geometry_request
+    from ...geometry.build import cached_geometry
+    from ...pipeline import geometry_dir, geometry_request
 
     req = geometry_request(case)
     return cached_geometry(req.pop("damper"), geometry_dir(case, out), **req)

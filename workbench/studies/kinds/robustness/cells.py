@@ -4,7 +4,7 @@ A :class:`Problem` is a frequency response to compute with every method
 (built lazily: it may need a rig model); :func:`run_cell` solves it with
 one named method (never raising for a failed solve), :func:`classify`
 judges each cell against the reference method (ok, wrong answer, failed).
-:func:`workbench.studies.robustness.method_map` runs, caches and classifies
+:func:`workbench.studies.kinds.robustness.compute.method_map` runs, caches and classifies
 the whole grid.
 """
 
@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, SolveError
-from ..hard_cases import METHODS
-from ..io import digest
-from .robustness_time import turning_points
+from ....errors import InputError, SolveError
+from ....hard_cases import METHODS
+from ....io import digest
+from .time_check import turning_points
 
 log = logging.getLogger(__name__)
 
@@ -60,7 +60,7 @@ class Problem:
 
 def method_options(name: str, base: dict[str, Any] | None = None):
     """The SolverOptions of method ``name`` (over the ``base`` fields)."""
-    from ..hbm.options import SolverOptions
+    from ....hbm.options import SolverOptions
 
     if name not in METHODS:
         raise InputError("methods", name, "one of " + ", ".join(METHODS))
@@ -69,8 +69,8 @@ def method_options(name: str, base: dict[str, Any] | None = None):
 
 def _cell_key(problem: Problem, method: str) -> str:
     opts = method_options(method, problem.base_options)
-    from ..config import record_to_dict
-    from .plan import _SOLVER_CODE
+    from ....config import record_to_dict
+    from ...engine.plan import _SOLVER_CODE
 
     return digest(
         {
@@ -84,7 +84,7 @@ def _cell_key(problem: Problem, method: str) -> str:
 
 def run_cell(problem: Problem, method: str) -> dict[str, Any]:
     """Solve ``problem`` with ``method``; never raises for a failed solve."""
-    from ..hbm.continuation import frequency_response
+    from ....hbm.continuation import frequency_response
 
     opts = method_options(method, problem.base_options)
     system, f1, band, outputs, names = problem.get()

@@ -14,26 +14,26 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..errors import SolveError
-from ..io import write_json
-from ..post.results import StudyResults
+from ...errors import SolveError
+from ...io import write_json
+from ...post.results import StudyResults
 from .plan import plan
 from .spec import StudySpec
 
 if TYPE_CHECKING:
-    from ..pipeline import PreparedModel
+    from ...pipeline import PreparedModel
 
 
 def write_outputs(
     results: StudyResults, spec: StudySpec, out: Path, prepared: dict[str, PreparedModel]
 ) -> None:
     """results.h5, CSV files, summary, figures, tables, manifest and report."""
-    from ..post.tables import write_rows_csv
+    from ...post.tables import write_rows_csv
 
     results.save(out / "results.h5")
     for c in results.cases:
         c.branch.to_csv(out / "cases" / f"{c.case_id}.csv", unit_scale=1e3, unit="mm")
-    from ..post.vtk_out import write_study_peaks
+    from ...post.vtk_out import write_study_peaks
 
     write_study_peaks(results, out, prepared, {c.digest: c.model_digest for c in plan(spec)})
     rows = results.summaries()
@@ -50,7 +50,7 @@ def write_outputs(
     for k, v in (results.extras.get("cached_costs") or {}).items():
         timings[f"{k}, reused from the cache (its cost when computed)"] = v
     sections = _sections(results, out)
-    if results.extras.get("nlmodes"):  # backbones and synthesis (workbench/studies/nlmodes.py)
+    if results.extras.get("nlmodes"):  # backbones and synthesis (engine/nlmodes.py)
         from .nlmodes import nlmode_sections
 
         sections += nlmode_sections(results.extras["nlmodes"], out)
@@ -78,9 +78,9 @@ def write_manifest_and_report(
     """
     import os
 
-    from ..post.inputs import study_inputs, used_inputs
-    from ..render.report import write_report
-    from ..versions import software_versions
+    from ...post.inputs import study_inputs, used_inputs
+    from ...render.report import write_report
+    from ...versions import software_versions
 
     inputs = (
         study_inputs(results.cases, spec.as_dict(), spec.source)
@@ -115,7 +115,7 @@ def write_manifest_and_report(
 
 def _sections(results: StudyResults, out: Path) -> list[dict]:
     try:
-        from ..render.sections import build_sections
+        from ...render.sections import build_sections
     except ImportError:  # the figure module is optional only while it is being built
         return []
     return build_sections(results, out, geometry_dirs=_geometry_dirs(out))
@@ -135,8 +135,8 @@ def headline(results: StudyResults) -> list[str]:
     at that point. A case whose curve did not reach its resonance is named
     with its lower bound, never given as a peak.
     """
-    from ..post.answer import mean_text
-    from ..post.tables import energy_floor, energy_text, num
+    from ...post.answer import mean_text
+    from ...post.tables import energy_floor, energy_text, num
 
     floor = energy_floor([c.summary()["h1_friction_energy_mj"] or 0.0 for c in results.cases])
     lines = []

@@ -35,7 +35,7 @@ with light damping its time integration does not become periodic within a
 few hundred periods, minutes each, so it is not part of the check). That
 check lives in :mod:`.robustness_time`, a cell's solve and verdict in
 :mod:`.robustness_cells`, the report text in
-:mod:`workbench.render.robustness_report`.
+:mod:`workbench.studies.kinds.robustness.report`.
 """
 
 from __future__ import annotations
@@ -45,12 +45,13 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError, SolveError
-from ..hard_cases import CASES, METHODS
-from ..io import write_json
-from ..post.tables import write_rows_csv
-from .outputs import write_manifest_and_report
-from .robustness_cells import (
+from ....errors import InputError, SolveError
+from ....hard_cases import CASES, METHODS
+from ....io import write_json
+from ....post.tables import write_rows_csv
+from ...engine.outputs import write_manifest_and_report
+from ...engine.spec import StudySpec
+from .cells import (
     ENERGY_TOL,
     STATUSES,
     Problem,
@@ -58,10 +59,9 @@ from .robustness_cells import (
     classify,
     run_cell,
 )
-from .robustness_time import (
+from .time_check import (
     time_checks,
 )
-from .spec import StudySpec
 
 log = logging.getLogger(__name__)
 
@@ -82,7 +82,7 @@ def method_map(
     The first method is the reference. Returns one record per cell, problems
     outer, methods inner.
     """
-    from ..log import bars_enabled, progress_bar
+    from ....log import bars_enabled, progress_bar
 
     for m in methods:
         if m not in METHODS:
@@ -134,8 +134,8 @@ def method_map(
 
 def case_problems(spec: StudySpec, out: Path, force: bool = False) -> list[Problem]:
     """The study's hard cases as problems on the assembled rig + damper models."""
-    from ..pipeline import band_for, prepare_model
-    from .plan import make_case
+    from ....pipeline import band_for, prepare_model
+    from ...engine.plan import make_case
 
     base = spec.as_dict()
     prepared: dict[str, Any] = {}
@@ -217,7 +217,7 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     method fails on a hard case, :class:`SolveError` is raised after every
     output is written (the CLI exits with 3).
     """
-    from ..log import mpi_size
+    from ....log import mpi_size
 
     if mpi_size() > 1:
         raise InputError(
@@ -332,7 +332,7 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     write_json(out / "time_check.json", checks)
 
     # figures
-    from ..render.robustness_figures import plot_branches, plot_failure_map, plot_hbm_vs_time
+    from .figures import plot_branches, plot_failure_map, plot_hbm_vs_time
 
     figs = out / "figures"
     t0 = time.perf_counter()
@@ -370,8 +370,8 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
 
 
 def _sections(spec: StudySpec, cells: list[dict], checks: list[dict], summary: dict) -> list[dict]:
-    """The report's sections (written by :mod:`workbench.render.robustness_report`)."""
-    from ..render.robustness_report import robustness_sections
+    """The report's sections (written by :mod:`workbench.studies.kinds.robustness.report`)."""
+    from .report import robustness_sections
 
     return robustness_sections(
         spec.peak_tolerance, {m: METHODS[m][1] for m in spec.methods}, ENERGY_TOL, cells, checks

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ..log import progress_bar
+from ...log import progress_bar
 
 
 class WorkCounter:
@@ -181,7 +181,7 @@ def case_cost(case, prepared, screen_rows: list[dict[str, Any]] | None = None) -
 
 def world_comm():
     """MPI.COMM_WORLD when the process runs under mpirun with several ranks, else None."""
-    from ..log import mpi_size
+    from ...log import mpi_size
 
     if mpi_size() > 1:
         from mpi4py import MPI

@@ -2,7 +2,7 @@
 
 Plain inputs: the design (:class:`workbench.post.uncertainty.Design`),
 the per (damper, phase) outputs and the analysis dict of
-:func:`workbench.studies.uncertainty.analyse`. One PNG per function, fixed
+:func:`workbench.studies.kinds.uncertainty.compute.analyse`. One PNG per function, fixed
 size, no time stamp. Dampers keep one colour throughout.
 """
 
@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from ..post.results import family_name
-from .common import pyplot, save_figure
-from .palette import damper_color
+from ....post.results import family_name
+from ....render.common import pyplot, save_figure
+from ....render.palette import damper_color
 
 QUANTITIES = (
     ("peak_amplitude_mm", "peak amplitude, mm"),
@@ -233,7 +233,7 @@ def plot_scatter(
 
 
 def _input_label(name: str) -> str:
-    from ..post.uncertainty import INPUT_LABELS
+    from ....post.uncertainty import INPUT_LABELS
 
     return INPUT_LABELS.get(name, name)
 

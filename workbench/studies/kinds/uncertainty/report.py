@@ -1,15 +1,15 @@
 """The uncertainty study's report sections (text, figure and table references).
 
-Plain inputs: the design, the analysis (``workbench.studies.uncertainty.analyse``),
+Plain inputs: the design, the analysis (``workbench.studies.kinds.uncertainty.compute.analyse``),
 the schedule record and the figures drawn by
-``workbench.render.uncertainty_figures``.
+``workbench.studies.kinds.uncertainty.figures``.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from ..post.uncertainty import Design
+from ....post.uncertainty import Design
 
 
 def uncertainty_sections(
@@ -35,8 +35,8 @@ def uncertainty_sections(
         "Uncertain inputs: " + "; ".join(f"{k}: {v}" for k, v in a["inputs"].items()) + ".",
         "The seat tilt misaligns one side's seat: the preload along that side's line or face "
         "tilts with the initial gap and vanishes at one end when the gap exceeds the static "
-        "approach (workbench/studies/imperfection.py). The FE reduction is shared by all "
-        "samples of a damper.",
+        "approach (workbench/studies/kinds/uncertainty/imperfection.py). The FE reduction is "
+        "shared by all samples of a damper.",
     ]
     eff = sched.get("efficiency")
     run = (

@@ -4,7 +4,7 @@ Parses the ``levels-<knob>`` options, resolves the base setting's 'file
 default' values to numbers, lays out the unique settings (the base, one
 ladder per varied knob, the reference: every varied knob at its finest
 level) and proposes a combination of per-knob levels for a tolerance.
-Nothing here solves; ``workbench.studies.fidelity`` computes the settings.
+Nothing here solves; ``workbench.studies.kinds.fidelity.compute`` computes the settings.
 """
 
 from __future__ import annotations
@@ -12,15 +12,16 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from ..errors import InputError
-from ..post.fidelity import Setting, fineness, level_label
-from .spec import StudySpec, parse_harmonics
+from ....errors import InputError
+from ....post.fidelity import Setting, fineness, level_label
+from ...engine.spec import StudySpec
+from .options import parse_harmonics
 
 
 def base_values(spec: StudySpec, damper: str) -> dict[str, Any]:
     """The base setting's knob values, with 'file default' (None) resolved to numbers."""
-    from ..geometry import load_geometry_params
-    from ..hbm.fourier import default_nt
+    from ....geometry import load_geometry_params
+    from ....hbm.fourier import default_nt
 
     v = {
         "mesh-size": spec.mesh_size,

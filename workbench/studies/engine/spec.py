@@ -15,14 +15,37 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..config import read_toml
-from ..errors import InputError, check_choice, check_int, check_range, did_you_mean
-from ..geometry.params import DAMPERS
-from ..limits import BAND_RATIO_MAX, BAND_RATIO_WHY, EXTREME_HINT
-from ..study_options import BY_NAME, OPTIONS, Option
+from ...config import read_toml
+from ...errors import InputError, check_choice, check_int, check_range, did_you_mean
+from ...geometry.params import DAMPERS
+from ...limits import BAND_RATIO_MAX, BAND_RATIO_WHY, EXTREME_HINT
+from ...study_options import OPTIONS as COMMON_OPTIONS
+from ...study_options import Option
+from ..kinds import all_kinds, kind_options
 
-# the options table lives in workbench/study_options.py (plain data the figures read too)
+
+def _all_options() -> tuple[Option, ...]:
+    """The options every kind shares (workbench/study_options.py, ``kind`` offering the
+    registered kinds) and each registered kind's own options."""
+    kinds = all_kinds()
+    names = tuple(k.name for k in kinds)
+    out = [
+        dataclasses.replace(o, choices=names, help="what the report shows: " + ", ".join(names))
+        if o.name == "kind"
+        else o
+        for o in COMMON_OPTIONS
+    ]
+    return (*out, *kind_options())
+
+
+OPTIONS = _all_options()
+BY_NAME = {o.name: o for o in OPTIONS}
+if len(BY_NAME) != len(OPTIONS):
+    raise RuntimeError("two study options share a name: " + ", ".join(o.name for o in OPTIONS))
+
 __all__ = [
+    "BY_NAME",
+    "OPTIONS",
     "StudySpec",
     "add_arguments",
     "check_option",
@@ -257,33 +280,9 @@ def _check_kind_options(spec: StudySpec) -> None:
             "no sweep unless kind = 'sweep'",
             f"kind is {spec.kind!r}, which does not sweep",
         )
-    for i, text in enumerate(spec.levels_harmonics):
-        parse_harmonics(text, f"levels-harmonics[{i}]")
-    for name in UQ_VALID:
-        uq_distribution(spec, name)
-
-
-def uq_distribution(spec: StudySpec, name: str):
-    """The distribution of uncertain input ``name`` (``uq-<name>``), checked against its
-    physical range (:data:`UQ_VALID`): a ``workbench.post.uncertainty.Distribution``."""
-    from ..post.uncertainty import parse_distribution
-
-    opt = f"uq-{name}"
-    text = getattr(spec, opt.replace("-", "_"))
-    d = parse_distribution(opt, text)
-    lo, hi = d.support
-    vlo, vhi = UQ_VALID[name]
-    if (
-        lo < vlo
-        or (vlo == 0.0 and name in ("cf", "kt", "kn") and lo <= 0.0)
-        or (vhi is not None and hi > vhi)
-    ):
-        raise InputError(
-            opt,
-            text,
-            f"a distribution within [{vlo:g}, {vhi if vhi is not None else 'inf'}] (give bounds)",
-        )
-    return d
+    for kind in all_kinds():  # every kind's own options, whatever the study's kind
+        if kind.check is not None:
+            kind.check(spec)
 
 
 def load_study(path: str | Path | None, cli_values: Mapping[str, Any] | None = None) -> StudySpec:
@@ -451,31 +450,3 @@ def cli_values(args: argparse.Namespace) -> dict[str, Any]:
 
 def sequence_of(spec: StudySpec, name: str) -> Sequence[Any]:
     return getattr(spec, name.replace("-", "_"))
-
-
-# the physical range of each uncertain input's distribution (None: unbounded above)
-UQ_VALID = {
-    "mu": (0.0, 2.0),
-    "cf": (0.0, None),
-    "kt": (0.0, None),
-    "kn": (0.0, None),
-    "damping": (0.0, 0.5),
-    "seat-tilt": (-5.0, 5.0),
-}
-
-
-def parse_harmonics(text: Any, param: str = "levels-harmonics") -> list[int]:
-    """'1' -> [1]; '0-3' -> [0, 1, 2, 3]; '1+3+5' -> [1, 3, 5]. Must contain 1."""
-    allowed = "'a-b' (a range) or 'h+h+...' (a list) of harmonics >= 0 containing 1"
-    s = str(text).strip()
-    try:
-        if "-" in s:
-            a, b = (int(x) for x in s.split("-"))
-            hs = list(range(a, b + 1))
-        else:
-            hs = [int(x) for x in s.split("+")]
-    except ValueError:
-        raise InputError(param, text, allowed) from None
-    if not hs or 1 not in hs or min(hs) < 0 or len(set(hs)) != len(hs) or max(hs) > 64:
-        raise InputError(param, text, allowed)
-    return sorted(hs)
