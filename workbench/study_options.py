@@ -32,8 +32,13 @@ from .limits import (
 
 __all__ = [
     "BY_NAME",
+    "CASES",
     "OPTIONS",
+    "SHOWN",
     "Option",
+    "declare",
+    "find",
+    "input_table",
 ]
 
 
@@ -57,6 +62,10 @@ class Option:
     soft_hi: float | None = None
     why: str = ""
     power_of_2: bool = False  # an int that must be a power of 2
+    # what the option shapes: "model" (mesh, reduction, contact: the model's cache key),
+    # "solve" (a case's curve on that model: the solve's cache key), "case" (each case takes
+    # one of its values: damper, phase, force) or "study" (what is computed and shown)
+    role: str = "study"
 
     @property
     def attr(self) -> str:
@@ -76,7 +85,15 @@ OPTIONS: tuple[Option, ...] = (
     ),
     # its choices and help come from the kind registry (workbench/studies/kinds/)
     Option("kind", "str", "comparison", "what the study computes", "study"),
-    Option("dampers", "strs", list(DAMPERS), "dampers to compare", "cases", choices=DAMPERS),
+    Option(
+        "dampers",
+        "strs",
+        list(DAMPERS),
+        "dampers to compare",
+        "cases",
+        choices=DAMPERS,
+        role="case",
+    ),
     Option(
         "phases",
         "floats",
@@ -85,6 +102,8 @@ OPTIONS: tuple[Option, ...] = (
         "cases",
         lo=-360.0,
         hi=360.0,
+        unit="deg",
+        role="case",
     ),
     Option(
         "forces",
@@ -97,9 +116,17 @@ OPTIONS: tuple[Option, ...] = (
         unit="N",
         soft_hi=FORCE_MAX_N,
         why=FORCE_WHY,
+        role="case",
     ),
     Option(
-        "response-blade", "int", 1, "blade whose response is reported (1 or 2)", "cases", lo=1, hi=2
+        "response-blade",
+        "int",
+        1,
+        "blade whose response is reported (1 or 2)",
+        "cases",
+        lo=1,
+        hi=2,
+        role="solve",
     ),
     # frequency band
     Option(
@@ -114,6 +141,7 @@ OPTIONS: tuple[Option, ...] = (
         unit="Hz",
         soft_hi=BAND_MAX_HZ,
         why=BAND_WHY,
+        role="solve",
     ),
     Option(
         "band-out-of-phase",
@@ -126,6 +154,7 @@ OPTIONS: tuple[Option, ...] = (
         unit="Hz",
         soft_hi=BAND_MAX_HZ,
         why=BAND_WHY,
+        role="solve",
     ),
     Option(
         "band-margin",
@@ -136,9 +165,21 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         hi=0.5,
+        unit="fraction",
+        role="solve",
     ),
     # contact and loads (None: geometry/contact.toml)
-    Option("mu", "float", None, "friction coefficient", "contact", lo=0.0, hi=2.0, optional=True),
+    Option(
+        "mu",
+        "float",
+        None,
+        "friction coefficient",
+        "contact",
+        lo=0.0,
+        hi=2.0,
+        optional=True,
+        role="model",
+    ),
     Option(
         "cf",
         "float",
@@ -151,6 +192,7 @@ OPTIONS: tuple[Option, ...] = (
         unit="N",
         soft_hi=CF_MAX_N,
         why=CF_WHY,
+        role="model",
     ),
     Option(
         "kt-line",
@@ -165,6 +207,7 @@ OPTIONS: tuple[Option, ...] = (
         soft_lo=K_LINE_N_PER_M2[0],
         soft_hi=K_LINE_N_PER_M2[1],
         why=K_LINE_WHY,
+        role="model",
     ),
     Option(
         "kn-line",
@@ -179,6 +222,7 @@ OPTIONS: tuple[Option, ...] = (
         soft_lo=K_LINE_N_PER_M2[0],
         soft_hi=K_LINE_N_PER_M2[1],
         why=K_LINE_WHY,
+        role="model",
     ),
     Option(
         "kt-face",
@@ -193,6 +237,7 @@ OPTIONS: tuple[Option, ...] = (
         soft_lo=K_FACE_N_PER_M3[0],
         soft_hi=K_FACE_N_PER_M3[1],
         why=K_FACE_WHY,
+        role="model",
     ),
     Option(
         "kn-face",
@@ -207,6 +252,7 @@ OPTIONS: tuple[Option, ...] = (
         soft_lo=K_FACE_N_PER_M3[0],
         soft_hi=K_FACE_N_PER_M3[1],
         why=K_FACE_WHY,
+        role="model",
     ),
     Option(
         "damping",
@@ -216,6 +262,8 @@ OPTIONS: tuple[Option, ...] = (
         "contact",
         lo=0.0,
         hi=0.5,
+        unit="ratio",
+        role="model",
     ),
     # modelling knobs (fidelity)
     Option(
@@ -229,6 +277,7 @@ OPTIONS: tuple[Option, ...] = (
         hi=1000.0,
         optional=True,
         unit="mm",
+        role="model",
     ),
     Option(
         "modes",
@@ -238,9 +287,16 @@ OPTIONS: tuple[Option, ...] = (
         "fidelity",
         lo=0,
         hi=400,
+        unit="per body",
+        role="model",
     ),
     Option(
-        "rigid-damper", "bool", False, "rigid 6-DOF damper instead of Craig-Bampton", "fidelity"
+        "rigid-damper",
+        "bool",
+        False,
+        "rigid 6-DOF damper instead of Craig-Bampton",
+        "fidelity",
+        role="model",
     ),
     Option(
         "points-per-line",
@@ -251,8 +307,19 @@ OPTIONS: tuple[Option, ...] = (
         lo=2,
         hi=400,
         optional=True,
+        unit="per line",
+        role="model",
     ),
-    Option("harmonics", "ints", [0, 1, 2, 3], "harmonics of the balance", "fidelity", lo=0, hi=64),
+    Option(
+        "harmonics",
+        "ints",
+        [0, 1, 2, 3],
+        "harmonics of the balance",
+        "fidelity",
+        lo=0,
+        hi=64,
+        role="solve",
+    ),
     Option(
         "nt",
         "int",
@@ -262,6 +329,8 @@ OPTIONS: tuple[Option, ...] = (
         lo=4,
         hi=8192,
         optional=True,
+        unit="samples per period",
+        role="solve",
     ),
     # geometry
     Option(
@@ -271,6 +340,7 @@ OPTIONS: tuple[Option, ...] = (
         "TOML overriding geometry tables (rig, cone, ...)",
         "geometry",
         optional=True,
+        role="model",
     ),
     Option(
         "cone-angle",
@@ -282,6 +352,8 @@ OPTIONS: tuple[Option, ...] = (
         lo_open=True,
         hi=89.0,
         optional=True,
+        unit="deg",
+        role="model",
     ),
     # solver
     Option(
@@ -292,8 +364,17 @@ OPTIONS: tuple[Option, ...] = (
         "solver",
         lo=5,
         hi=100000,
+        unit="points per curve",
+        role="solve",
     ),
-    Option("stability", "bool", True, "Hill stability of every point", "solver"),
+    Option(
+        "stability",
+        "bool",
+        True,
+        "Hill stability of every point",
+        "solver",
+        role="solve",
+    ),
     Option(
         "nonlinear-modes",
         "bool",
@@ -326,3 +407,37 @@ OPTIONS: tuple[Option, ...] = (
 
 
 BY_NAME = {o.name: o for o in OPTIONS}
+# options declared elsewhere (each study kind's own, by the kind registry when it finds them)
+_DECLARED: dict[str, Option] = {}
+
+
+def declare(options: tuple[Option, ...]) -> None:
+    """Make options declared outside this module (a study kind's own) known to
+    :func:`find` (figure labels and units read them there)."""
+    _DECLARED.update((o.name, o) for o in options)
+
+
+def find(name: str) -> Option | None:
+    """The declaration of study option ``name`` (dashes or underscores): a shared option or
+    a registered kind's own; None for an unknown name."""
+    key = name.replace("_", "-")
+    return BY_NAME.get(key) or _DECLARED.get(key)
+
+
+# the shared options a report's Inputs table lists by default besides the name, the kind and
+# the model and solver options (a kind names its own list: ``StudyKind.shows``)
+CASES = tuple(o.name for o in OPTIONS if o.group in ("cases", "band"))
+SHOWN = (*CASES, "field-shapes")
+
+
+def input_table(
+    shows: tuple[str, ...] = SHOWN, own: tuple[Option, ...] = ()
+) -> tuple[tuple[str, str], ...]:
+    """The rows ``(option, unit)`` of a report's Inputs table, in order: the study's name
+    and kind, the shared options ``shows``, a kind's own options ``own``, then the options
+    of the model and of the solver (each option's ``role``)."""
+    head = [BY_NAME[n] for n in ("name", "kind", *shows)]
+    model = [o for o in OPTIONS if o.role == "model"]
+    solver = [o for o in OPTIONS if o.role == "solve" and o.group not in ("cases", "band")]
+    rows = dict.fromkeys((o.name, o.unit) for o in (*head, *own, *model, *solver))
+    return tuple(rows)

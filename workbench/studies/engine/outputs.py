@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 from ...errors import SolveError
 from ...io import write_json
 from ...post.results import StudyResults
+from ..kinds import inputs_table
 from .plan import plan
 from .spec import StudySpec
 
@@ -82,10 +83,11 @@ def write_manifest_and_report(
     from ...render.report import write_report
     from ...versions import software_versions
 
+    table = inputs_table(spec.kind)  # the kind's rows, from its registry entry
     inputs = (
-        study_inputs(results.cases, spec.as_dict(), spec.source)
+        study_inputs(results.cases, spec.as_dict(), spec.source, table)
         if results is not None
-        else used_inputs(spec.as_dict(), spec.source)
+        else used_inputs(spec.as_dict(), spec.source, table=table)
     )
     loads = [
         c.inputs["load_average"]["value"]

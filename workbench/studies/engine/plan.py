@@ -16,33 +16,12 @@ from pathlib import Path
 from typing import Any
 
 from ...io import digest
-from .spec import StudySpec
+from .spec import OPTIONS, StudySpec
 
-MODEL_KEYS = (
-    "mu",
-    "cf",
-    "kt-line",
-    "kn-line",
-    "kt-face",
-    "kn-face",
-    "damping",
-    "mesh-size",
-    "modes",
-    "rigid-damper",
-    "points-per-line",
-    "geometry",
-    "cone-angle",
-)
-SOLVE_KEYS = (
-    "harmonics",
-    "nt",
-    "max-points",
-    "stability",
-    "response-blade",
-    "band-margin",
-    "band-in-phase",
-    "band-out-of-phase",
-)
+# the options in each part of a case's key: declared by each option's ``role``
+# (workbench/study_options.py, a kind's options.py)
+MODEL_KEYS = tuple(o.name for o in OPTIONS if o.role == "model")
+SOLVE_KEYS = tuple(o.name for o in OPTIONS if o.role == "solve")
 
 
 @dataclass(frozen=True)

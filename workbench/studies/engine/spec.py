@@ -409,7 +409,7 @@ def range_text(o: Option) -> str:
         lo = f"{o.soft_lo:g} <= "
     if o.soft_hi is not None:
         hi = f" <= {o.soft_hi:g}"
-    u = f" {o.unit}" if o.unit else ""
+    u = f" {o.unit}".replace("%", "%%") if o.unit else ""
     what = "whole number" if whole else "number"
     if o.kind.endswith("s"):
         text = f"; {what}s, each {lo}{x}{hi}{u}" if lo or hi else f"; {what}s{u}"

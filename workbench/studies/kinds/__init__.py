@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from ...errors import check_choice
-from ...study_options import Option
+from ...study_options import SHOWN, Option, declare, input_table
 
 
 @dataclass(frozen=True)
@@ -43,6 +43,9 @@ class StudyKind:
     options: tuple[Option, ...] = ()
     check: Callable[[Any], None] | None = None
     order: int = 100  # place in the kind list (the built-in kinds first)
+    # the shared options its report's Inputs table lists before its own (then the model's
+    # and the solver's follow: workbench.study_options.input_table)
+    shows: tuple[str, ...] = SHOWN
 
 
 _REGISTRY: dict[str, StudyKind] | None = None
@@ -62,6 +65,7 @@ def _discover() -> dict[str, StudyKind]:
                     f"'{info.name}' (the package's name)"
                 )
             found.append(kind)
+            declare(kind.options)  # figure labels find a kind's option (study_options.find)
     found.sort(key=lambda k: (k.order, k.name))
     return {k.name: k for k in found}
 
@@ -90,6 +94,13 @@ def kind_options() -> tuple[Option, ...]:
     return tuple(o for k in all_kinds() for o in k.options)
 
 
+def inputs_table(name: str) -> tuple[tuple[str, str], ...]:
+    """The rows ``(option, unit)`` of the Inputs table of a study of kind ``name``: its
+    shared options (``shows``), its own options, the model's and the solver's."""
+    kind = get(name)
+    return input_table(kind.shows, kind.options)
+
+
 def rediscover() -> tuple[str, ...]:
     """Search the package again (after a kind was added at run time); the names."""
     global _REGISTRY
@@ -97,4 +108,12 @@ def rediscover() -> tuple[str, ...]:
     return names()
 
 
-__all__ = ["StudyKind", "all_kinds", "get", "kind_options", "names", "rediscover"]
+__all__ = [
+    "StudyKind",
+    "all_kinds",
+    "get",
+    "inputs_table",
+    "kind_options",
+    "names",
+    "rediscover",
+]

@@ -25,4 +25,5 @@ KIND = StudyKind(
     options=OPTIONS,
     check=check,
     order=3,
+    shows=("dampers", "phases", "forces"),
 )

@@ -24,6 +24,7 @@ OPTIONS: tuple[Option, ...] = (
         lo_open=True,
         hi=100.0,
         optional=True,
+        unit="%",
     ),
     Option(
         "knobs",
@@ -42,6 +43,7 @@ OPTIONS: tuple[Option, ...] = (
         "fidelity",
         lo=0.0,
         lo_open=True,
+        unit="mm",
     ),
     Option(
         "levels-modes",
@@ -51,6 +53,7 @@ OPTIONS: tuple[Option, ...] = (
         "fidelity",
         lo=0,
         hi=400,
+        unit="per body",
     ),
     Option(
         "levels-harmonics",
@@ -67,6 +70,7 @@ OPTIONS: tuple[Option, ...] = (
         "fidelity",
         lo=4,
         hi=8192,
+        unit="samples per period",
     ),
     Option(
         "levels-points-per-line",
@@ -76,6 +80,7 @@ OPTIONS: tuple[Option, ...] = (
         "fidelity",
         lo=2,
         hi=400,
+        unit="per line",
     ),
     Option(
         "levels-rigid-damper",

@@ -23,4 +23,5 @@ KIND = StudyKind(
     run=_run,
     options=OPTIONS,
     order=4,
+    shows=("response-blade", "band-margin"),
 )

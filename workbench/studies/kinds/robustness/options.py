@@ -44,6 +44,7 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         hi=100.0,
+        unit="%",
     ),
     Option(
         "time-check",

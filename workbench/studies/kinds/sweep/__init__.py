@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ....study_options import SHOWN
 from .. import StudyKind
 
 
@@ -21,4 +22,5 @@ KIND = StudyKind(
     description="the comparison once per value of one option (--sweep, --sweep-values)",
     run=_run,
     order=2,
+    shows=("sweep", "sweep-values", *SHOWN),
 )

@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from ....study_options import CASES
 from .. import StudyKind
 from .options import OPTIONS, check
 
@@ -24,4 +25,5 @@ KIND = StudyKind(
     options=OPTIONS,
     check=check,
     order=5,
+    shows=CASES,
 )
