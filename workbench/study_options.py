@@ -16,6 +16,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from .contact.laws import law_params
 from .geometry.params import DAMPERS
 from .limits import (
     BAND_MAX_HZ,
@@ -71,6 +72,24 @@ class Option:
     def attr(self) -> str:
         return self.name.replace("-", "_")
 
+
+# a contact law's parameter: None is "the contact files' value" (geometry/contact.toml)
+LAW_OPTIONS: tuple[Option, ...] = tuple(
+    Option(
+        p.name,
+        "float",
+        None,
+        p.help,
+        "contact",
+        lo=p.lo,
+        hi=p.hi,
+        lo_open=p.lo_open,
+        optional=True,
+        unit=p.unit,
+        role="model",
+    )
+    for p in law_params()
+)
 
 OPTIONS: tuple[Option, ...] = (
     # what to compute
@@ -169,17 +188,8 @@ OPTIONS: tuple[Option, ...] = (
         role="solve",
     ),
     # contact and loads (None: geometry/contact.toml)
-    Option(
-        "mu",
-        "float",
-        None,
-        "friction coefficient",
-        "contact",
-        lo=0.0,
-        hi=2.0,
-        optional=True,
-        role="model",
-    ),
+    # each contact law's parameters, declared in workbench/contact/laws/ (mu: every law's)
+    *LAW_OPTIONS,
     Option(
         "cf",
         "float",

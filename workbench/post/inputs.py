@@ -18,7 +18,7 @@ from ..geometry.shapes import all_shapes
 from ..geometry.shapes import get as get_shape
 from ..geometry.shapes import names as shape_names
 from ..study_options import input_table
-from .provenance import _rel_source, rel
+from .provenance import _rel_source, contact_fields, contact_value, rel
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -73,15 +73,8 @@ def used_inputs(
     cp: ContactParams = load_contact_params(geometry_file=geo_file)
     csrc = contact_sources(geometry_file=geo_file)
     contact_default = {
-        opt: (getattr(cp, f), f"default: {_rel_source(csrc[f])}")
-        for f, opt in (
-            ("mu", "mu"),
-            ("cf_n", "cf"),
-            ("kt_line_n_per_m2", "kt-line"),
-            ("kn_line_n_per_m2", "kn-line"),
-            ("kt_face_n_per_m3", "kt-face"),
-            ("kn_face_n_per_m3", "kn-face"),
-        )
+        opt: (contact_value(cp, f), f"default: {_rel_source(csrc[f])}")
+        for f, opt in contact_fields()
     }
     sweep = values.get("sweep") if kind == "sweep" else None
 

@@ -70,7 +70,7 @@ def model_pictures(geometry, contact_params, out: Path, *, comm=None) -> float |
     damper = geometry.damper
     figs = out / "figures"
     stamp = figs / f".model_{damper}.json"
-    key = digest({"geometry": geometry.digest, "contact": contact_params})
+    key = digest({"geometry": geometry.digest, "contact": contact_params.key()})
     rank = 0 if comm is None else comm.rank
     fresh = False
     if rank == 0:

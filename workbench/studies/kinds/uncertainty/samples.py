@@ -18,8 +18,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ....errors import InputError
 from ....io import digest
 from ....post.uncertainty import Design, Distribution
@@ -151,7 +149,7 @@ def prepare_sample(base_prep, case: Case, tilt_deg: float):
     model's. With the nominal values and no tilt this is exactly the model
     ``pipeline.prepare_model`` builds for the case.
     """
-    from ....assembly.model import preloads
+    from ....assembly.model import pair_params
     from ....contact.elements import ContactElements
     from ....hbm.system import System
     from ....pipeline import PreparedModel, contact_params_for
@@ -161,16 +159,12 @@ def prepare_sample(base_prep, case: Case, tilt_deg: float):
     base = base_prep.assembled
     cp = contact_params_for(case)
     contact = base.contact
-    kt, kn = cp.pair_stiffness(contact.kind, contact.weight)
     beta = float(base_prep.geometry.params["rig"]["platform"]["angle_deg"])
-    n0 = preloads(contact, cp.cf_n, cp.mu, beta)
-    n0 = tilted_preloads(contact.points, contact.side, kn, n0, tilt_deg)
+    pairs = pair_params(contact, cp, beta)
+    n0 = tilted_preloads(contact.points, contact.side, pairs["kn"], pairs["n0"], tilt_deg)
     model = dataclasses.replace(
         base,
-        mu=np.full(contact.n_pairs, cp.mu),
-        kt=kt,
-        kn=kn,
-        n0=n0,
+        **{**pairs, "n0": n0},
         info={
             **base.info,
             "total_preload_n": float(n0.sum()),
