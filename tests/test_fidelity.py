@@ -141,8 +141,8 @@ def test_propose_combination_takes_the_coarsest_level_meeting_alone():
 
 @pytest.mark.parametrize("text, value", [("1%", 1.0), (" 0.5 %", 0.5), ("2", 2.0), (3, 3.0)])
 def test_tolerance_accepts_percent(text, value):
-    assert resolve({"tolerance": text}, "f.toml").tolerance == value
-    assert resolve(cli_values={"tolerance": text}).tolerance == value
+    assert resolve({"tolerance": text}, "f.toml").fidelity.tolerance == value
+    assert resolve(cli_values={"tolerance": text}).fidelity.tolerance == value
 
 
 @pytest.mark.parametrize("text", ["abc%", "%", "0%", "-1", "150%"])
@@ -191,18 +191,18 @@ def test_the_study_file_resolves():
     from workbench.studies.kinds.fidelity.ladders import plan_settings
 
     spec = load_study(ROOT / "studies" / "fidelity.toml", {"tolerance": "1%"})
-    assert spec.kind == "fidelity" and spec.tolerance == 1.0
+    assert spec.kind == "fidelity" and spec.fidelity.tolerance == 1.0
     settings, ladders = plan_settings(spec, "cone")
     ref = next(s for s in settings if s.role == "reference")
     assert ref.values == {
-        "mesh-size": min(spec.levels_mesh_size),
-        "modes": max(spec.levels_modes),
+        "mesh-size": min(spec.fidelity.levels_mesh_size),
+        "modes": max(spec.fidelity.levels_modes),
         "harmonics": list(range(8)),
-        "nt": max(spec.levels_nt),
-        "points-per-line": max(spec.levels_points_per_line),
+        "nt": max(spec.fidelity.levels_nt),
+        "points-per-line": max(spec.fidelity.levels_points_per_line),
         "rigid-damper": False,
     }
-    assert len(spec.levels_mesh_size) >= 4
+    assert len(spec.fidelity.levels_mesh_size) >= 4
     # every setting is distinct; one knob differs from the base in each ladder setting
     assert len({s.key for s in settings}) == len(settings)
     base = settings[0].values

@@ -22,28 +22,32 @@ from workbench.studies.engine.spec import BY_NAME, OPTIONS, resolve
 # A whole study kind in one package: one option of its own, its check, its run.
 ECHO = '''"""A test kind: writes its one option and the damper list into the study folder."""
 import json
+from dataclasses import dataclass
 from pathlib import Path
 
 from workbench.errors import InputError
 from workbench.studies.kinds import StudyKind
-from workbench.study_options import Option
+from workbench.study_options import option
 
-OPTIONS = (Option("echo-words", "int", 3, "echo: words to write", "echo", lo=1, hi=9),)
+
+@dataclass(frozen=True)
+class EchoOptions:
+    echo_words: int = option("int", 3, "echo: words to write", "echo", lo=1, hi=9)
 
 
 def _check(spec):
-    if spec.echo_words == 7:
+    if spec.echo.echo_words == 7:
         raise InputError("echo-words", 7, "any whole number 1..9 but 7")
 
 
 def _run(spec, out, force=False):
-    summary = {"kind": spec.kind, "words": spec.echo_words, "dampers": spec.dampers}
+    summary = {"kind": spec.kind, "words": spec.echo.echo_words, "dampers": spec.dampers}
     Path(out, "echo.json").write_text(json.dumps(summary))
     return summary
 
 
 KIND = StudyKind(name="echo", description="writes its option back (a test kind)",
-                 run=_run, options=OPTIONS, check=_check, order=90)
+                 run=_run, options=EchoOptions, check=_check, order=90)
 '''
 
 BUILT_IN = ("comparison", "sweep", "fidelity", "robustness", "uncertainty")
@@ -53,7 +57,7 @@ def test_the_built_in_kinds_are_registered_in_order_with_their_options():
     assert kinds.names() == BUILT_IN
     assert BY_NAME["kind"].choices == BUILT_IN
     # each kind's own options are study options, after the shared ones, in kind order
-    own = [o.name for k in kinds.all_kinds() for o in k.options]
+    own = [o.name for k in kinds.all_kinds() for o in k.declared]
     assert {"tolerance", "levels-nt", "methods", "uq-samples"} <= set(own)
     assert [o.name for o in OPTIONS][-len(own) :] == own
     # and they are checked in every study, whatever its kind (a typo is a typo)
@@ -95,7 +99,7 @@ def _upd_with(extra: str, *args: str) -> subprocess.CompletedProcess:
 
 def test_a_new_kind_package_is_found_without_other_edits(echo_dir, tmp_path):
     assert kinds.names() == (*BUILT_IN, "echo")
-    assert kinds.get("echo").options[0].name == "echo-words"
+    assert kinds.get("echo").declared[0].name == "echo-words"
     # the CLI lists it in --help, offers its option and runs it through the registry
     h = _upd_with(str(echo_dir), "study", "--help")
     assert h.returncode == 0, h.stderr

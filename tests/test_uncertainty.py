@@ -387,7 +387,8 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
                 "failed": np.zeros(len(pk), bool),
                 "digests": [""] * len(pk),
             }
-    a = U.analyse(SimpleNamespace(uq_threshold=0.4, uq_seed=1), design, dists, res)
+    spec = SimpleNamespace(uncertainty=SimpleNamespace(uq_threshold=0.4, uq_seed=1))
+    a = U.analyse(spec, design, dists, res)
     assert a["robust"] == {"in-phase": "cone", "out-of-phase": "cone"}
     drivers = {(r["damper"], r["family"]): r["driver"] for r in a["groups"]}
     assert drivers[("cone", "in-phase")] == "mu" and drivers[("wedge", "in-phase")] == "seat-tilt"

@@ -1,19 +1,26 @@
 """The study options every kind shares (plain data), and the :class:`Option` record.
 
-Every option of ``upd study`` is one :class:`Option` declared once (name,
-type, default, help, allowed values, unit, and the physical range of a real
-rig with its reason): the options every study kind reads are in
-:data:`OPTIONS` here, a kind's own options in its folder
+Every option of ``upd study`` is declared once, with its name, type, default,
+help, allowed values, unit, role (what it shapes: the model, a case's solve,
+the cases themselves or only the study) and the physical range of a real rig
+with its reason. The options every study kind reads are the fields of
+:class:`SharedOptions` here (each ``name: type = option(...)``); a kind's own
+options are the fields of its record in its folder
 (``workbench/studies/kinds/<kind>/options.py``, reached through the kind
-registry). :mod:`workbench.studies.engine.spec` turns them into a
-:class:`~workbench.studies.engine.spec.StudySpec` from a TOML file and the
-command line, and the figures read an option's help text for their axis
-labels. Nothing here computes: it imports no study.
+registry); a contact law's parameters are declared by the law
+(``workbench/contact/laws/``) and become :data:`LAW_OPTIONS`.
+:mod:`workbench.studies.engine.spec` turns them into a
+:class:`~workbench.studies.engine.spec.StudySpec` (a subclass of
+:class:`SharedOptions`) from a TOML file and the command line; the parser,
+its help, the cache keys (``role``), the report's Inputs table
+(:func:`input_table`, ``unit``) and the figures' axis labels (:func:`find`)
+read these declarations. Nothing here computes: it imports no study.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
+from pathlib import Path
 from typing import Any
 
 from .contact.laws import law_params
@@ -73,6 +80,26 @@ class Option:
         return self.name.replace("-", "_")
 
 
+def option(kind: str, default: Any, help: str, group: str, **more: Any) -> Any:
+    """Declare a study option as a field of an options record (:class:`SharedOptions`, a
+    kind's own record): its :class:`Option` (name: the field's, dashes for underscores)
+    without its name, and its default (a list default is copied for each record)."""
+    meta = {"option": dict(kind=kind, default=default, help=help, group=group, **more)}
+    if isinstance(default, list):
+        return field(default_factory=lambda d=default: list(d), metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+def options_of(record: type) -> tuple[Option, ...]:
+    """The study options declared by the fields of ``record`` (see :func:`option`), in
+    field order."""
+    return tuple(
+        Option(f.name.replace("_", "-"), **f.metadata["option"])
+        for f in fields(record)
+        if "option" in f.metadata
+    )
+
+
 # a contact law's parameter: None is "the contact files' value" (geometry/contact.toml)
 LAW_OPTIONS: tuple[Option, ...] = tuple(
     Option(
@@ -91,30 +118,26 @@ LAW_OPTIONS: tuple[Option, ...] = tuple(
     for p in law_params()
 )
 
-OPTIONS: tuple[Option, ...] = (
+
+@dataclass(frozen=True)
+class SharedOptions:
+    """The options every study kind shares, one field each (``spec.<name>``)."""
+
     # what to compute
-    Option("name", "str", "study", "a name for the study (report title, file names)", "study"),
-    Option(
-        "allow-extreme",
+    name: str = option("str", "study", "a name for the study (report title, file names)", "study")
+    allow_extreme: bool = option(
         "bool",
         False,
         "accept values beyond the physical ranges of a real rig (forces, cf, contact "
         "stiffness, bands, uq-threshold) for a numerical experiment; the numerical limits stay",
         "study",
-    ),
+    )
     # its choices and help come from the kind registry (workbench/studies/kinds/)
-    Option("kind", "str", "comparison", "what the study computes", "study"),
-    Option(
-        "dampers",
-        "strs",
-        list(DAMPERS),
-        "dampers to compare",
-        "cases",
-        choices=DAMPERS,
-        role="case",
-    ),
-    Option(
-        "phases",
+    kind: str = option("str", "comparison", "what the study computes", "study")
+    dampers: list[str] = option(
+        "strs", list(DAMPERS), "dampers to compare", "cases", choices=DAMPERS, role="case"
+    )
+    phases: list[float] = option(
         "floats",
         [0.0, 180.0],
         "inter-blade phase angles, deg (0 in-phase, 180 out-of-phase)",
@@ -123,9 +146,8 @@ OPTIONS: tuple[Option, ...] = (
         hi=360.0,
         unit="deg",
         role="case",
-    ),
-    Option(
-        "forces",
+    )
+    forces: list[float] = option(
         "floats",
         [0.096, 3.84, 9.6, 15.0, 20.0, 25.0, 30.0],
         "excitation force amplitudes on each blade, N",
@@ -136,20 +158,12 @@ OPTIONS: tuple[Option, ...] = (
         soft_hi=FORCE_MAX_N,
         why=FORCE_WHY,
         role="case",
-    ),
-    Option(
-        "response-blade",
-        "int",
-        1,
-        "blade whose response is reported (1 or 2)",
-        "cases",
-        lo=1,
-        hi=2,
-        role="solve",
-    ),
+    )
+    response_blade: int = option(
+        "int", 1, "blade whose response is reported (1 or 2)", "cases", lo=1, hi=2, role="solve"
+    )
     # frequency band
-    Option(
-        "band-in-phase",
+    band_in_phase: list[float] = option(
         "floats",
         [],
         "band of the in-phase family [lo, hi], Hz "
@@ -161,9 +175,8 @@ OPTIONS: tuple[Option, ...] = (
         soft_hi=BAND_MAX_HZ,
         why=BAND_WHY,
         role="solve",
-    ),
-    Option(
-        "band-out-of-phase",
+    )
+    band_out_of_phase: list[float] = option(
         "floats",
         [],
         "band of the out-of-phase family [lo, hi], Hz (empty: automatic)",
@@ -174,9 +187,8 @@ OPTIONS: tuple[Option, ...] = (
         soft_hi=BAND_MAX_HZ,
         why=BAND_WHY,
         role="solve",
-    ),
-    Option(
-        "band-margin",
+    )
+    band_margin: float = option(
         "float",
         0.04,
         "automatic band: relative margin beyond the linear limits",
@@ -186,12 +198,10 @@ OPTIONS: tuple[Option, ...] = (
         hi=0.5,
         unit="fraction",
         role="solve",
-    ),
+    )
     # contact and loads (None: geometry/contact.toml)
-    # each contact law's parameters, declared in workbench/contact/laws/ (mu: every law's)
-    *LAW_OPTIONS,
-    Option(
-        "cf",
+    # (each contact law's parameters, declared in workbench/contact/laws/: spec.law[name])
+    cf: float | None = option(
         "float",
         None,
         "centrifugal force on the damper, N",
@@ -203,9 +213,8 @@ OPTIONS: tuple[Option, ...] = (
         soft_hi=CF_MAX_N,
         why=CF_WHY,
         role="model",
-    ),
-    Option(
-        "kt-line",
+    )
+    kt_line: float | None = option(
         "float",
         None,
         "tangential stiffness per metre of line (cone, cylinder), N/m per m",
@@ -218,9 +227,8 @@ OPTIONS: tuple[Option, ...] = (
         soft_hi=K_LINE_N_PER_M2[1],
         why=K_LINE_WHY,
         role="model",
-    ),
-    Option(
-        "kn-line",
+    )
+    kn_line: float | None = option(
         "float",
         None,
         "normal stiffness per metre of line, N/m per m",
@@ -233,9 +241,8 @@ OPTIONS: tuple[Option, ...] = (
         soft_hi=K_LINE_N_PER_M2[1],
         why=K_LINE_WHY,
         role="model",
-    ),
-    Option(
-        "kt-face",
+    )
+    kt_face: float | None = option(
         "float",
         None,
         "tangential stiffness per m^2 of face (wedge), N/m per m^2",
@@ -248,9 +255,8 @@ OPTIONS: tuple[Option, ...] = (
         soft_hi=K_FACE_N_PER_M3[1],
         why=K_FACE_WHY,
         role="model",
-    ),
-    Option(
-        "kn-face",
+    )
+    kn_face: float | None = option(
         "float",
         None,
         "normal stiffness per m^2 of face (wedge), N/m per m^2",
@@ -263,9 +269,8 @@ OPTIONS: tuple[Option, ...] = (
         soft_hi=K_FACE_N_PER_M3[1],
         why=K_FACE_WHY,
         role="model",
-    ),
-    Option(
-        "damping",
+    )
+    damping: float = option(
         "float",
         0.002,
         "modal damping ratio of the assembly (stuck contacts)",
@@ -274,10 +279,9 @@ OPTIONS: tuple[Option, ...] = (
         hi=0.5,
         unit="ratio",
         role="model",
-    ),
+    )
     # modelling knobs (fidelity)
-    Option(
-        "mesh-size",
+    mesh_size: float | None = option(
         "float",
         None,
         "global mesh size, mm (None: the geometry file's)",
@@ -288,9 +292,8 @@ OPTIONS: tuple[Option, ...] = (
         optional=True,
         unit="mm",
         role="model",
-    ),
-    Option(
-        "modes",
+    )
+    modes: int = option(
         "int",
         12,
         "fixed-interface modes per body (Craig-Bampton)",
@@ -299,17 +302,11 @@ OPTIONS: tuple[Option, ...] = (
         hi=400,
         unit="per body",
         role="model",
-    ),
-    Option(
-        "rigid-damper",
-        "bool",
-        False,
-        "rigid 6-DOF damper instead of Craig-Bampton",
-        "fidelity",
-        role="model",
-    ),
-    Option(
-        "points-per-line",
+    )
+    rigid_damper: bool = option(
+        "bool", False, "rigid 6-DOF damper instead of Craig-Bampton", "fidelity", role="model"
+    )
+    points_per_line: int | None = option(
         "int",
         None,
         "contact points per line (cone, cylinder)",
@@ -319,19 +316,11 @@ OPTIONS: tuple[Option, ...] = (
         optional=True,
         unit="per line",
         role="model",
-    ),
-    Option(
-        "harmonics",
-        "ints",
-        [0, 1, 2, 3],
-        "harmonics of the balance",
-        "fidelity",
-        lo=0,
-        hi=64,
-        role="solve",
-    ),
-    Option(
-        "nt",
+    )
+    harmonics: list[int] = option(
+        "ints", [0, 1, 2, 3], "harmonics of the balance", "fidelity", lo=0, hi=64, role="solve"
+    )
+    nt: int | None = option(
         "int",
         None,
         "AFT time samples per period (None: solver default)",
@@ -341,19 +330,17 @@ OPTIONS: tuple[Option, ...] = (
         optional=True,
         unit="samples per period",
         role="solve",
-    ),
+    )
     # geometry
-    Option(
-        "geometry",
+    geometry: Path | None = option(
         "path",
         None,
         "TOML overriding geometry tables (rig, cone, ...)",
         "geometry",
         optional=True,
         role="model",
-    ),
-    Option(
-        "cone-angle",
+    )
+    cone_angle: float | None = option(
         "float",
         None,
         "cone semi-angle, deg (None: cone.toml's)",
@@ -364,10 +351,9 @@ OPTIONS: tuple[Option, ...] = (
         optional=True,
         unit="deg",
         role="model",
-    ),
+    )
     # solver
-    Option(
-        "max-points",
+    max_points: int = option(
         "int",
         400,
         "largest number of continuation points per curve",
@@ -376,45 +362,44 @@ OPTIONS: tuple[Option, ...] = (
         hi=100000,
         unit="points per curve",
         role="solve",
-    ),
-    Option(
-        "stability",
-        "bool",
-        True,
-        "Hill stability of every point",
-        "solver",
-        role="solve",
-    ),
-    Option(
-        "nonlinear-modes",
+    )
+    stability: bool = option("bool", True, "Hill stability of every point", "solver", role="solve")
+    nonlinear_modes: bool = option(
         "bool",
         False,
         "comparison study: also one nonlinear mode "
         "(backbone) per damper and family, the forced responses synthesised from it and "
         "their check against the curves (workbench/studies/engine/nlmodes.py)",
         "solver",
-    ),
-    Option(
-        "field-shapes",
+    )
+    field_shapes: bool = option(
         "bool",
         False,
         "also write cases/<case>_peak_field.vtu: the displacement at each curve's peak on "
         "the full rig and damper meshes (ParaView; about one reduction's eigen solve per "
         "damper, workbench/studies/engine/fields.py)",
         "solver",
-    ),
+    )
     # sweeps and the fidelity/robustness studies
-    Option(
-        "sweep",
+    sweep: str | None = option(
         "str",
         None,
         "name of a scalar option to sweep (e.g. cf, cone-angle, mu)",
         "sweep",
         optional=True,
-    ),
-    Option("sweep-values", "floats", [], "values of the swept option", "sweep"),
-)
+    )
+    sweep_values: list[float] = option("floats", [], "values of the swept option", "sweep")
 
+
+def _shared() -> tuple[Option, ...]:
+    """The shared options in --help order: the contact laws' parameters first in the
+    contact group."""
+    own = options_of(SharedOptions)
+    at = next(i for i, o in enumerate(own) if o.group == "contact")
+    return (*own[:at], *LAW_OPTIONS, *own[at:])
+
+
+OPTIONS: tuple[Option, ...] = _shared()
 
 BY_NAME = {o.name: o for o in OPTIONS}
 # options declared elsewhere (each study kind's own, by the kind registry when it finds them)

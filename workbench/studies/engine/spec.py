@@ -2,7 +2,9 @@
 
 Every option has one name used in three places: the TOML key
 (``mesh-size = 4.0``), the command-line flag (``--mesh-size 4``) and, with
-dashes as underscores, the :class:`StudySpec` attribute (``spec.mesh_size``).
+dashes as underscores, the :class:`StudySpec` attribute (``spec.mesh_size``; a
+kind's own option ``spec.<kind>.<name>``, a contact law's parameter
+``spec.law[name]``).
 Precedence: built-in default < study file < command line. Lists are TOML
 arrays or comma-separated on the command line (``--forces 9.6,30``).
 """
@@ -12,6 +14,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -19,8 +22,8 @@ from ...config import read_toml
 from ...errors import InputError, check_choice, check_int, check_range, did_you_mean
 from ...geometry.params import DAMPERS
 from ...limits import BAND_RATIO_MAX, BAND_RATIO_WHY, EXTREME_HINT
+from ...study_options import LAW_OPTIONS, Option, SharedOptions, options_of
 from ...study_options import OPTIONS as COMMON_OPTIONS
-from ...study_options import Option
 from ..kinds import all_kinds, kind_options
 
 
@@ -55,34 +58,68 @@ __all__ = [
 ]
 
 
-def _fields() -> list[tuple[str, Any, Any]]:
-    out = []
-    for o in OPTIONS:
-        default = (
-            dataclasses.field(default_factory=lambda d=o.default: list(d))
-            if isinstance(o.default, list)
-            else o.default
-        )
-        out.append((o.attr, Any, default))
-    return out
+# where each option's value lives in a spec: "" (a field of SharedOptions), "law" (the
+# mapping of the contact laws' parameters) or a kind's name (that kind's options record)
+_HOME: dict[str, str] = {
+    **{o.name: "" for o in options_of(SharedOptions)},
+    **{o.name: "law" for o in LAW_OPTIONS},
+    **{o.name: k.name for k in all_kinds() for o in k.declared},
+}
 
 
-_Base = dataclasses.make_dataclass("_Base", _fields(), frozen=True)
+@dataclass(frozen=True)
+class StudySpec(SharedOptions):
+    """The resolved options of a study.
 
+    The options every kind shares are the fields of
+    :class:`~workbench.study_options.SharedOptions` (``spec.forces``,
+    ``spec.mesh_size``: the option's name with underscores); the contact laws'
+    parameters are ``spec.law[name]`` (``spec.law["mu"]``, declared in
+    ``workbench/contact/laws/``); a kind's own options are the fields of its
+    record, ``spec.<kind>.<name>`` (``spec.fidelity.levels_nt``, declared in
+    ``workbench/studies/kinds/<kind>/options.py``). The study file and the
+    command line name every option alike, flat (``levels-nt = [16, 32]``).
+    """
 
-class StudySpec(_Base):  # type: ignore[misc, valid-type]
-    """The resolved options of a study (attributes: option names with underscores)."""
+    law: dict[str, float | None] = field(default_factory=dict)
+    kinds: dict[str, Any] = field(default_factory=dict)  # kind name -> its options record
+    source: dict[str, str] = field(default_factory=dict, compare=False)  # option -> origin
 
-    source: dict[str, str]  # option name -> "default" | file path | "command line"
+    def __getattr__(self, name: str) -> Any:
+        """``spec.<kind>``: that kind's options record."""
+        kinds = self.__dict__.get("kinds") or {}
+        if name in kinds:
+            return kinds[name]
+        raise AttributeError(f"StudySpec has no attribute {name!r}")
+
+    def value(self, name: str) -> Any:
+        """The value of option ``name`` (dashed or with underscores), wherever it lives."""
+        key = name.replace("_", "-")
+        home = _HOME[key]
+        if home == "law":
+            return self.law[key]
+        return getattr(self if home == "" else self.kinds[home], key.replace("-", "_"))
 
     def as_dict(self) -> dict[str, Any]:
         """Option name -> value (dashed names, JSON-able)."""
-        return {o.name: _jsonable(getattr(self, o.attr)) for o in OPTIONS}
+        return {o.name: _jsonable(self.value(o.name)) for o in OPTIONS}
 
     def replace(self, **changes: Any) -> StudySpec:
-        spec = dataclasses.replace(self, **changes)
-        object.__setattr__(spec, "source", dict(self.source))
-        return spec
+        """A copy with some options changed (names with underscores, as attributes)."""
+        shared: dict[str, Any] = {}
+        law = dict(self.law)
+        kinds = dict(self.kinds)
+        for attr, v in changes.items():
+            home = _HOME.get(attr.replace("_", "-"))
+            if home is None:
+                raise TypeError(f"StudySpec.replace: no option {attr!r}")
+            if home == "":
+                shared[attr] = v
+            elif home == "law":
+                law[attr.replace("_", "-")] = v
+            else:
+                kinds[home] = dataclasses.replace(kinds[home], **{attr: v})
+        return dataclasses.replace(self, **shared, law=law, kinds=kinds, source=dict(self.source))
 
 
 def _jsonable(v: Any) -> Any:
@@ -209,8 +246,16 @@ def resolve(
             o = BY_NAME[key]
             values[o.attr] = check_option(o, v, extreme)
             source[key] = origin
-    spec = StudySpec(**values)
-    object.__setattr__(spec, "source", source)
+    spec = StudySpec(
+        **{f.name: values[f.name] for f in dataclasses.fields(SharedOptions)},
+        law={o.name: values[o.attr] for o in LAW_OPTIONS},
+        kinds={
+            k.name: k.options(**{f.name: values[f.name] for f in dataclasses.fields(k.options)})
+            for k in all_kinds()
+            if k.options is not None
+        },
+        source=source,
+    )
     _check_consistency(spec)
     return spec
 
@@ -449,4 +494,4 @@ def cli_values(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def sequence_of(spec: StudySpec, name: str) -> Sequence[Any]:
-    return getattr(spec, name.replace("-", "_"))
+    return spec.value(name)

@@ -17,12 +17,12 @@ from __future__ import annotations
 import importlib
 import pkgutil
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 from ...errors import check_choice
-from ...study_options import SHOWN, Option, declare, input_table
+from ...study_options import SHOWN, Option, SharedOptions, declare, input_table, options_of
 
 
 @dataclass(frozen=True)
@@ -31,21 +31,28 @@ class StudyKind:
 
     ``run(spec, out, force)`` computes the study into the folder ``out``
     (cases, tables, figures, ``report.html``) and returns the JSON summary
-    ``upd study --json`` prints. ``options`` are the kind's own study options
-    (every kind's options are accepted and checked in every study, so a typo
-    in one is refused whatever the kind); ``check(spec)`` refuses an
-    inconsistent combination of them with an ``InputError``.
+    ``upd study --json`` prints. ``options`` is the record of the kind's own
+    study options (a frozen dataclass whose fields are declared with
+    :func:`workbench.study_options.option`; a study reads them as
+    ``spec.<kind>.<field>``). Every kind's options are accepted and checked in
+    every study, so a typo in one is refused whatever the kind; ``check(spec)``
+    refuses an inconsistent combination of them with an ``InputError``.
     """
 
     name: str  # the value of the study option ``kind``; the package's name
     description: str  # one line, for ``upd study --help`` and the report
     run: Callable[[Any, Path, bool], dict[str, Any]]
-    options: tuple[Option, ...] = ()
+    options: type | None = None  # the record of its own options
     check: Callable[[Any], None] | None = None
     order: int = 100  # place in the kind list (the built-in kinds first)
     # the shared options its report's Inputs table lists before its own (then the model's
     # and the solver's follow: workbench.study_options.input_table)
     shows: tuple[str, ...] = SHOWN
+
+    @property
+    def declared(self) -> tuple[Option, ...]:
+        """Its own study options, in field order."""
+        return () if self.options is None else options_of(self.options)
 
 
 _REGISTRY: dict[str, StudyKind] | None = None
@@ -64,8 +71,14 @@ def _discover() -> dict[str, StudyKind]:
                     f"{mod.__name__}: KIND.name is '{kind.name}', expected "
                     f"'{info.name}' (the package's name)"
                 )
+            taken = {f.name for f in fields(SharedOptions)} | {"law", "kinds", "source"}
+            if kind.options is not None and info.name in taken:  # spec.<kind> is its record
+                raise RuntimeError(
+                    f"{mod.__name__}: a kind with options of its own may not share its "
+                    f"name with a field of the study spec ({info.name})"
+                )
             found.append(kind)
-            declare(kind.options)  # figure labels find a kind's option (study_options.find)
+            declare(kind.declared)  # figure labels find a kind's option (study_options.find)
     found.sort(key=lambda k: (k.order, k.name))
     return {k.name: k for k in found}
 
@@ -91,14 +104,14 @@ def get(name: str, param: str = "kind") -> StudyKind:
 
 def kind_options() -> tuple[Option, ...]:
     """Every registered kind's own options, kind by kind."""
-    return tuple(o for k in all_kinds() for o in k.options)
+    return tuple(o for k in all_kinds() for o in k.declared)
 
 
 def inputs_table(name: str) -> tuple[tuple[str, str], ...]:
     """The rows ``(option, unit)`` of the Inputs table of a study of kind ``name``: its
     shared options (``shows``), its own options, the model's and the solver's."""
     kind = get(name)
-    return input_table(kind.shows, kind.options)
+    return input_table(kind.shows, kind.declared)
 
 
 def rediscover() -> tuple[str, ...]:

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import StudyKind
-from .options import OPTIONS, check
+from .options import FidelityOptions, check
 
 
 def _run(spec: Any, out: Path, force: bool = False) -> dict[str, Any]:
@@ -22,7 +22,7 @@ KIND = StudyKind(
     description="knob ladders against a reference, Pareto front, cheapest setting "
     "within --tolerance",
     run=_run,
-    options=OPTIONS,
+    options=FidelityOptions,
     check=check,
     order=3,
     shows=("dampers", "phases", "forces"),

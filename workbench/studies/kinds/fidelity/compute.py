@@ -246,8 +246,8 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     if len(spec.dampers) != 1:
         raise InputError("dampers", spec.dampers, "exactly one damper in a fidelity study")
     damper = spec.dampers[0]
-    if not spec.knobs:
-        raise InputError("knobs", spec.knobs, "at least one knob to vary")
+    if not spec.fidelity.knobs:
+        raise InputError("knobs", spec.fidelity.knobs, "at least one knob to vary")
     settings, ladders = plan_settings(spec, damper)
     comp = _Computer(spec, damper, out, force)
     ref = next(s for s in settings if s.role == "reference")
@@ -273,8 +273,10 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
         st.limit_errors = limit_errors(st, combined)
     pick = None
     combos: list[dict[str, Any]] = []
-    if spec.tolerance is not None:
-        pick, combos, extra = _tolerance(spec.tolerance, settings, ladders, comp, ref, combined)
+    if spec.fidelity.tolerance is not None:
+        pick, combos, extra = _tolerance(
+            spec.fidelity.tolerance, settings, ladders, comp, ref, combined
+        )
         settings = settings + extra
     candidates = [s for s in settings if s.role != "reference"]
     front_idx = pareto_front([(s.time_s, s.error()) for s in candidates])
@@ -285,7 +287,7 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     for r in rows:
         r["on_front"] = r["label"] in front_labels
     if pick is not None:
-        _log_pick(pick, spec.tolerance)
+        _log_pick(pick, spec.fidelity.tolerance)
     failures = [f"{s.label}: {m}" for s in settings for m in s.failed]
     for f in failures:
         log.warning("failed solve kept: %s", f)
@@ -318,7 +320,7 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
         "n_models_prepared": comp.n_models_prepared,
         "settings": rows,
         "pareto_front": [s.label for s in front],
-        "tolerance_pct": spec.tolerance,
+        "tolerance_pct": spec.fidelity.tolerance,
         "picked": pick,
         "combinations": combos,
         "failures": failures,
@@ -479,7 +481,7 @@ def write_fidelity_outputs(
     from .report import fidelity_outputs
 
     head, timings, sections = fidelity_outputs(
-        out, settings, ladders, ref, front, summary, conditions, spec.tolerance, wall_s
+        out, settings, ladders, ref, front, summary, conditions, spec.fidelity.tolerance, wall_s
     )
     write_manifest_and_report(out, spec, "fidelity study,", head, timings, sections)
 

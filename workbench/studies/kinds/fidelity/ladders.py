@@ -45,15 +45,15 @@ def base_values(spec: StudySpec, damper: str) -> dict[str, Any]:
 def knob_levels(spec: StudySpec) -> dict[str, list[Any]]:
     """knob -> its levels (settings values), coarsest first, for the knobs the study varies."""
     raw = {
-        "mesh-size": [float(x) for x in spec.levels_mesh_size],
-        "modes": [int(x) for x in spec.levels_modes],
-        "harmonics": [parse_harmonics(x) for x in spec.levels_harmonics],
-        "nt": [int(x) for x in spec.levels_nt],
-        "points-per-line": [int(x) for x in spec.levels_points_per_line],
-        "rigid-damper": [x == "rigid" for x in spec.levels_rigid_damper],
+        "mesh-size": [float(x) for x in spec.fidelity.levels_mesh_size],
+        "modes": [int(x) for x in spec.fidelity.levels_modes],
+        "harmonics": [parse_harmonics(x) for x in spec.fidelity.levels_harmonics],
+        "nt": [int(x) for x in spec.fidelity.levels_nt],
+        "points-per-line": [int(x) for x in spec.fidelity.levels_points_per_line],
+        "rigid-damper": [x == "rigid" for x in spec.fidelity.levels_rigid_damper],
     }
     out: dict[str, list[Any]] = {}
-    for knob in spec.knobs:
+    for knob in spec.fidelity.knobs:
         levels = raw[knob]
         if not levels:
             raise InputError(
@@ -63,7 +63,7 @@ def knob_levels(spec: StudySpec) -> dict[str, list[Any]]:
         if len(set(keys)) != len(keys):
             raise InputError(
                 f"levels-{knob}",
-                getattr(spec, f"levels_{knob}".replace("-", "_")),
+                getattr(spec.fidelity, f"levels_{knob}".replace("-", "_")),
                 "distinct levels",
             )
         out[knob] = sorted(levels, key=lambda x, k=knob: fineness(k, x))

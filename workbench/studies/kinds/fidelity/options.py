@@ -7,14 +7,18 @@ registry (:mod:`workbench.studies.kinds`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from ....errors import InputError
-from ....study_options import Option
+from ....study_options import option
 
-OPTIONS: tuple[Option, ...] = (
-    Option(
-        "tolerance",
+
+@dataclass(frozen=True)
+class FidelityOptions:
+    """The fidelity study's own options, one field each (``spec.fidelity.<name>``)."""
+
+    tolerance: float | None = option(
         "percent",
         None,
         "accepted error, percent ('1' or '1%%'): pick the "
@@ -25,18 +29,16 @@ OPTIONS: tuple[Option, ...] = (
         hi=100.0,
         optional=True,
         unit="%",
-    ),
-    Option(
-        "knobs",
+    )
+    knobs: list[str] = option(
         "strs",
         ["mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"],
         "knobs a fidelity study varies, one at a time about the base setting (the study's "
         "own mesh-size, modes, ...)",
         "fidelity",
         choices=("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"),
-    ),
-    Option(
-        "levels-mesh-size",
+    )
+    levels_mesh_size: list[float] = option(
         "floats",
         [14.0, 11.0, 9.0, 7.0],
         "fidelity: global mesh sizes to try, mm (finest = smallest)",
@@ -44,9 +46,8 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         unit="mm",
-    ),
-    Option(
-        "levels-modes",
+    )
+    levels_modes: list[int] = option(
         "ints",
         [4, 8, 12, 24, 40],
         "fidelity: fixed-interface modes per body to try",
@@ -54,16 +55,14 @@ OPTIONS: tuple[Option, ...] = (
         lo=0,
         hi=400,
         unit="per body",
-    ),
-    Option(
-        "levels-harmonics",
+    )
+    levels_harmonics: list[str] = option(
         "strs",
         ["1", "0-1", "0-3", "0-5", "0-7"],
         "fidelity: harmonic sets to try, each 'a-b' (a range) or 'h+h+...' (a list)",
         "fidelity",
-    ),
-    Option(
-        "levels-nt",
+    )
+    levels_nt: list[int] = option(
         "ints",
         [16, 32, 64, 128, 256, 512],
         "fidelity: AFT time samples per period to try",
@@ -71,9 +70,8 @@ OPTIONS: tuple[Option, ...] = (
         lo=4,
         hi=8192,
         unit="samples per period",
-    ),
-    Option(
-        "levels-points-per-line",
+    )
+    levels_points_per_line: list[int] = option(
         "ints",
         [5, 11, 23, 33, 45],
         "fidelity: contact points per line to try",
@@ -81,16 +79,14 @@ OPTIONS: tuple[Option, ...] = (
         lo=2,
         hi=400,
         unit="per line",
-    ),
-    Option(
-        "levels-rigid-damper",
+    )
+    levels_rigid_damper: list[str] = option(
         "strs",
         ["rigid", "flexible"],
         "fidelity: damper models to try (finest = flexible)",
         "fidelity",
         choices=("rigid", "flexible"),
-    ),
-)
+    )
 
 
 def parse_harmonics(text: Any, param: str = "levels-harmonics") -> list[int]:
@@ -112,5 +108,5 @@ def parse_harmonics(text: Any, param: str = "levels-harmonics") -> list[int]:
 
 def check(spec: Any) -> None:
     """Every harmonic set of ``levels-harmonics`` parses."""
-    for i, text in enumerate(spec.levels_harmonics):
+    for i, text in enumerate(spec.fidelity.levels_harmonics):
         parse_harmonics(text, f"levels-harmonics[{i}]")

@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import StudyKind
-from .options import OPTIONS
+from .options import RobustnessOptions
 
 
 def _run(spec: Any, out: Path, force: bool = False) -> dict[str, Any]:
@@ -21,7 +21,7 @@ KIND = StudyKind(
     name="robustness",
     description="solution methods x hard cases: the map of success and failure",
     run=_run,
-    options=OPTIONS,
+    options=RobustnessOptions,
     order=4,
     shows=("response-blade", "band-margin"),
 )

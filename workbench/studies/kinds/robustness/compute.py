@@ -140,7 +140,7 @@ def case_problems(spec: StudySpec, out: Path, force: bool = False) -> list[Probl
     base = spec.as_dict()
     prepared: dict[str, Any] = {}
     problems = []
-    for name in spec.hard_cases:
+    for name in spec.robustness.hard_cases:
         hc = CASES[name]
         settings = {**base, **hc.settings}
         case = make_case(hc.damper, hc.phase_deg, hc.force_n, settings, name)
@@ -233,11 +233,15 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     problems = case_problems(spec, out, force=force)
     t0 = time.perf_counter()
     cells = method_map(
-        problems, list(spec.methods), cache, force=force, tol_pct=spec.peak_tolerance
+        problems,
+        list(spec.robustness.methods),
+        cache,
+        force=force,
+        tol_pct=spec.robustness.peak_tolerance,
     )
     timings["cells (wall)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    checks = time_checks(cache, force=force) if spec.time_check else []
+    checks = time_checks(cache, force=force) if spec.robustness.time_check else []
     timings["time integration"] = time.perf_counter() - t0
 
     # tables
@@ -285,7 +289,7 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
             "message",
         ),
     )
-    ref = spec.methods[0]
+    ref = spec.robustness.methods[0]
     case_rows = []
     for p in problems:
         r = next(c for c in cells if c["case"] == p.name and c["method"] == ref)
@@ -336,8 +340,13 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
 
     figs = out / "figures"
     t0 = time.perf_counter()
-    plot_failure_map(cells, list(spec.methods), list(spec.hard_cases), figs / "robustness_map.png")
-    plot_branches(cells, list(spec.hard_cases), figs / "robustness_curves.png")
+    plot_failure_map(
+        cells,
+        list(spec.robustness.methods),
+        list(spec.robustness.hard_cases),
+        figs / "robustness_map.png",
+    )
+    plot_branches(cells, list(spec.robustness.hard_cases), figs / "robustness_curves.png")
     if checks:
         plot_hbm_vs_time(checks, figs / "hbm_vs_time.png")
     timings["figures"] = time.perf_counter() - t0
@@ -361,7 +370,7 @@ def run_robustness(spec: StudySpec, out: str | Path, *, force: bool = False) -> 
     write_json(out / "summary.json", summary)
     if summary["reference_failed"]:  # everything is written; the CLI exits with 3
         raise SolveError(
-            f"the reference method '{spec.methods[0]}' failed on "
+            f"the reference method '{spec.robustness.methods[0]}' failed on "
             + ", ".join(summary["reference_failed"])
             + f" (see {out}/report.html)",
             partial=summary,
@@ -374,18 +383,23 @@ def _sections(spec: StudySpec, cells: list[dict], checks: list[dict], summary: d
     from .report import robustness_sections
 
     return robustness_sections(
-        spec.peak_tolerance, {m: METHODS[m][1] for m in spec.methods}, ENERGY_TOL, cells, checks
+        spec.robustness.peak_tolerance,
+        {m: METHODS[m][1] for m in spec.robustness.methods},
+        ENERGY_TOL,
+        cells,
+        checks,
     )
 
 
 def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str, Any]:
-    ref = spec.methods[0]
-    counts = {m: {s: 0 for s in STATUSES} for m in spec.methods}
+    opts = spec.robustness
+    ref = opts.methods[0]
+    counts = {m: {s: 0 for s in STATUSES} for m in opts.methods}
     for c in cells:
         counts[c["method"]][c["status"]] += 1
     ref_failed = [c["case"] for c in cells if c["method"] == ref and c["status"] == "failed"]
     head = [
-        f"{len(spec.methods)} methods x {len(spec.hard_cases)} hard cases = {len(cells)} "
+        f"{len(opts.methods)} methods x {len(opts.hard_cases)} hard cases = {len(cells)} "
         f"solves; reference method '{ref}'."
     ]
     head.append(
@@ -393,7 +407,7 @@ def _summary(spec: StudySpec, cells: list[dict], checks: list[dict]) -> dict[str
         if ref_failed
         else f"The reference method '{ref}' reached the band end on every hard case."
     )
-    for m in spec.methods:
+    for m in spec.robustness.methods:
         k = counts[m]
         head.append(
             f"{m}: {k['ok']} ok, {k['wrong']} wrong answer, {k['failed']} failed; "

@@ -8,15 +8,20 @@ registry (:mod:`workbench.studies.kinds`). The methods and cases are named in
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from ....hard_cases import CASES, METHODS
-from ....study_options import Option
+from ....study_options import option
 
 ROBUSTNESS_METHODS = tuple(METHODS)
 ROBUSTNESS_CASES = tuple(CASES)
 
-OPTIONS: tuple[Option, ...] = (
-    Option(
-        "methods",
+
+@dataclass(frozen=True)
+class RobustnessOptions:
+    """The robustness study's own options, one field each (``spec.robustness.<name>``)."""
+
+    methods: list[str] = option(
         "strs",
         list(ROBUSTNESS_METHODS),
         "solution methods of a robustness "
@@ -24,17 +29,15 @@ OPTIONS: tuple[Option, ...] = (
         + ", ".join(ROBUSTNESS_METHODS),
         "robustness",
         choices=ROBUSTNESS_METHODS,
-    ),
-    Option(
-        "hard-cases",
+    )
+    hard_cases: list[str] = option(
         "strs",
         list(ROBUSTNESS_CASES),
         "hard cases of a robustness study: " + ", ".join(ROBUSTNESS_CASES),
         "robustness",
         choices=ROBUSTNESS_CASES,
-    ),
-    Option(
-        "peak-tolerance",
+    )
+    peak_tolerance: float = option(
         "float",
         1.0,
         "robustness: a method that converges but whose "
@@ -45,13 +48,11 @@ OPTIONS: tuple[Option, ...] = (
         lo_open=True,
         hi=100.0,
         unit="%",
-    ),
-    Option(
-        "time-check",
+    )
+    time_check: bool = option(
         "bool",
         True,
         "robustness: check the harmonic balance against time "
         "integration at its suspect points (small models)",
         "robustness",
-    ),
-)
+    )

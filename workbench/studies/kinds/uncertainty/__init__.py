@@ -9,7 +9,7 @@ from typing import Any
 
 from ....study_options import CASES
 from .. import StudyKind
-from .options import OPTIONS, check
+from .options import UncertaintyOptions, check
 
 
 def _run(spec: Any, out: Path, force: bool = False) -> dict[str, Any]:
@@ -22,7 +22,7 @@ KIND = StudyKind(
     name="uncertainty",
     description="sampled inputs: distributions of the peak, Sobol indices (MPI)",
     run=_run,
-    options=OPTIONS,
+    options=UncertaintyOptions,
     check=check,
     order=5,
     shows=CASES,

@@ -111,7 +111,7 @@ def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) ->
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
     dists = study_distributions(spec)
-    design = make_design(dists, spec.uq_samples, spec.uq_seed)
+    design = make_design(dists, spec.uncertainty.uq_samples, spec.uncertainty.uq_seed)
     samples = plan_samples(spec, design)
     case_dir = out / "cache" / "cases"
     case_dir.mkdir(parents=True, exist_ok=True)
@@ -176,7 +176,7 @@ def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) ->
             len(order),
             work,
             comm,
-            static=spec.uq_schedule == "static",
+            static=spec.uncertainty.uq_schedule == "static",
             desc=f"{spec.name}: samples",
         )
         if order
@@ -184,7 +184,7 @@ def run_uncertainty(spec: StudySpec, out: str | Path, *, force: bool = False) ->
     )
     timings["samples (wall)"] = time.perf_counter() - t0
     sched = schedule_efficiency(records, size)
-    sched["schedule"] = spec.uq_schedule
+    sched["schedule"] = spec.uncertainty.uq_schedule
     sched["n_computed"] = len(records)
 
     summary: dict[str, Any] = {
@@ -303,8 +303,8 @@ def analyse(
         keys = [k for k in results if k[1] == ph]
         ok = np.all([np.isfinite(clean[k]["peak_amplitude_mm"][ab]) for k in keys], axis=0)
         common[ph] = ab[ok]
-        if spec.uq_threshold is not None:
-            thresholds[family_name(ph)] = float(spec.uq_threshold)
+        if spec.uncertainty.uq_threshold is not None:
+            thresholds[family_name(ph)] = float(spec.uncertainty.uq_threshold)
         else:
             pk = np.concatenate([clean[k]["peak_amplitude_mm"][ab] for k in keys])
             pk = pk[np.isfinite(pk)]
@@ -324,7 +324,7 @@ def analyse(
         }
         for q, _, _ in QUANTITIES:
             row["stats"][q] = statistics(c[q][ab], thr if q == "peak_amplitude_mm" else None)
-            row["indices"][q] = sobol_indices(design, c[q], seed=spec.uq_seed)
+            row["indices"][q] = sobol_indices(design, c[q], seed=spec.uncertainty.uq_seed)
         pc = c["peak_amplitude_mm"][common[phase]]
         row["stats"]["peak_amplitude_mm"]["n_common"] = int(pc.size)
         if pc.size:
@@ -338,7 +338,7 @@ def analyse(
     for phase in fams:
         keys = [k for k in results if k[1] == phase]
         P = np.column_stack([clean[k]["peak_amplitude_mm"][common[phase]] for k in keys])
-        rc = ranking_confidence(P, [k[0] for k in keys], seed=spec.uq_seed)
+        rc = ranking_confidence(P, [k[0] for k in keys], seed=spec.uncertainty.uq_seed)
         if rc:
             ranking[family_name(phase)] = rc
         cand = [

@@ -7,71 +7,62 @@ registry (:mod:`workbench.studies.kinds`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 from ....errors import InputError
 from ....limits import UQ_THRESHOLD_MAX_MM, UQ_THRESHOLD_WHY
-from ....study_options import Option
+from ....study_options import option
 
-OPTIONS: tuple[Option, ...] = (
+
+@dataclass(frozen=True)
+class UncertaintyOptions:
+    """The uncertainty study's own options, one field each (``spec.uncertainty.<name>``)."""
+
     # a distribution is "uniform LO HI", "normal MEAN SD [LO HI]" or
     # "lognormal MEDIAN SIGMA_LN [LO HI]" (bounds truncate); cf, kt, kn are factors on the
     # nominal value (study option or geometry/contact.toml), mu and damping absolute values,
     # seat-tilt the misalignment of one side's seat, deg
-    Option(
-        "uq-inputs",
+    uq_inputs: list[str] = option(
         "strs",
         ["mu", "cf", "kt", "kn", "damping", "seat-tilt"],
         "uncertainty: the inputs that vary (the others stay nominal)",
         "uncertainty",
         choices=("mu", "cf", "kt", "kn", "damping", "seat-tilt"),
-    ),
-    Option(
-        "uq-mu",
-        "str",
-        "normal 0.5 0.1 0.25 0.75",
-        "uncertainty: friction coefficient",
-        "uncertainty",
-    ),
-    Option(
-        "uq-cf",
+    )
+    uq_mu: str = option(
+        "str", "normal 0.5 0.1 0.25 0.75", "uncertainty: friction coefficient", "uncertainty"
+    )
+    uq_cf: str = option(
         "str",
         "normal 1 0.1 0.7 1.3",
         "uncertainty: factor on the nominal centrifugal force",
         "uncertainty",
-    ),
-    Option(
-        "uq-kt",
+    )
+    uq_kt: str = option(
         "str",
         "lognormal 1 0.5 0.25 4",
         "uncertainty: factor on the nominal tangential contact stiffness (line and face)",
         "uncertainty",
-    ),
-    Option(
-        "uq-kn",
+    )
+    uq_kn: str = option(
         "str",
         "lognormal 1 0.5 0.25 4",
         "uncertainty: factor on the nominal normal contact stiffness (line and face)",
         "uncertainty",
-    ),
-    Option(
-        "uq-damping",
-        "str",
-        "lognormal 0.002 0.3 0.001 0.004",
-        "uncertainty: modal damping ratio",
-        "uncertainty",
-    ),
-    Option(
-        "uq-seat-tilt",
+    )
+    uq_damping: str = option(
+        "str", "lognormal 0.002 0.3 0.001 0.004", "uncertainty: modal damping ratio", "uncertainty"
+    )
+    uq_seat_tilt: str = option(
         "str",
         "normal 0 0.01 -0.03 0.03",
         "uncertainty: seat "
         "misalignment of one side, deg (tilts the preload along the line or face; "
         "opens one end when large)",
         "uncertainty",
-    ),
-    Option(
-        "uq-samples",
+    )
+    uq_samples: int = option(
         "int",
         16,
         "uncertainty: base samples N per damper and family "
@@ -80,18 +71,16 @@ OPTIONS: tuple[Option, ...] = (
         lo=2,
         hi=1 << 20,
         power_of_2=True,
-    ),
-    Option(
-        "uq-seed",
+    )
+    uq_seed: int = option(
         "int",
         2026,
         "uncertainty: seed of the scrambled Sobol sequence",
         "uncertainty",
         lo=0,
         hi=2**31 - 1,
-    ),
-    Option(
-        "uq-threshold",
+    )
+    uq_threshold: float | None = option(
         "float",
         None,
         "uncertainty: peak amplitude threshold, mm (the "
@@ -104,9 +93,8 @@ OPTIONS: tuple[Option, ...] = (
         unit="mm",
         soft_hi=UQ_THRESHOLD_MAX_MM,
         why=UQ_THRESHOLD_WHY,
-    ),
-    Option(
-        "uq-schedule",
+    )
+    uq_schedule: str = option(
         "str",
         "dynamic",
         "uncertainty: how samples spread over MPI ranks: "
@@ -114,8 +102,7 @@ OPTIONS: tuple[Option, ...] = (
         "(round-robin, for comparison)",
         "uncertainty",
         choices=("dynamic", "static"),
-    ),
-)
+    )
 
 
 # the physical range of each uncertain input's distribution (None: unbounded above)
@@ -135,7 +122,7 @@ def uq_distribution(spec: Any, name: str):
     from ....post.uncertainty import parse_distribution
 
     opt = f"uq-{name}"
-    text = getattr(spec, opt.replace("-", "_"))
+    text = getattr(spec.uncertainty, opt.replace("-", "_"))
     d = parse_distribution(opt, text)
     lo, hi = d.support
     vlo, vhi = UQ_VALID[name]

@@ -29,10 +29,10 @@ from .options import uq_distribution
 def study_distributions(spec: StudySpec) -> dict[str, Distribution]:
     """The distributions of the study's uncertain inputs (``uq-inputs``), checked."""
     out: dict[str, Distribution] = {}
-    for name in spec.uq_inputs:
+    for name in spec.uncertainty.uq_inputs:
         out[name] = uq_distribution(spec, name)
     if not out:
-        raise InputError("uq-inputs", spec.uq_inputs, "at least one uncertain input")
+        raise InputError("uq-inputs", spec.uncertainty.uq_inputs, "at least one uncertain input")
     return out
 
 
@@ -58,7 +58,7 @@ def nominal_contact(spec: StudySpec):
     from ....assembly.params import load_contact_params
 
     return load_contact_params(
-        mu=spec.mu,
+        mu=spec.law["mu"],
         cf_n=spec.cf,
         kt_line_n_per_m2=spec.kt_line,
         kn_line_n_per_m2=spec.kn_line,
