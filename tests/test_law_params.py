@@ -12,7 +12,8 @@ import pytest
 from conftest import ROOT
 
 from workbench.assembly.params import ContactParams, load_contact_params
-from workbench.contact.laws import COMMON, REGISTRY, law_params
+from workbench.contact.law_params import COMMON, law_params, params_of
+from workbench.contact.laws import REGISTRY
 from workbench.errors import InputError
 from workbench.post.provenance import contact_args
 from workbench.studies.engine.plan import MODEL_KEYS
@@ -34,7 +35,7 @@ PARAMS = (
 CHECK = """
 import json
 from workbench.assembly.params import load_contact_params, contact_sources
-from workbench.contact.laws import law_params
+from workbench.contact.law_params import law_params, params_of
 from workbench.post.provenance import contact_args
 from workbench.studies.engine.plan import MODEL_KEYS
 from workbench.studies.engine.spec import BY_NAME, resolve
@@ -47,6 +48,7 @@ except InputError as e:
     refused = str(e)
 print(json.dumps({
     "params": [p.name for p in law_params()],
+    "of": [p.name for p in params_of("etalaw")],
     "option": [o.kind, o.lo, o.hi, o.unit, o.group, o.role, o.help],
     "refused": refused,
     "default": load_contact_params().law,
@@ -59,7 +61,7 @@ print(json.dumps({
 
 def test_every_law_reads_the_common_friction_coefficient():
     assert [p.name for p in COMMON] == ["mu"]
-    assert all(law.params[: len(COMMON)] == COMMON for law in REGISTRY.values())
+    assert all(params_of(name) == COMMON for name in REGISTRY)
     assert [p.name for p in law_params()] == ["mu"]  # no built-in law has one of its own
 
 
@@ -88,7 +90,7 @@ def test_a_law_with_its_own_parameter_is_one_module(tmp_path):
     )
     assert r.returncode == 0, r.stderr
     got = json.loads(r.stdout)
-    assert got["params"] == ["mu", "eta"]
+    assert got["params"] == ["mu", "eta"] and got["of"] == ["mu", "eta"]
     assert got["option"] == ["float", 0.0, 1.0, "1/s", "contact", "model", "a test parameter"]
     assert "eta" in got["refused"] and "1" in got["refused"]
     assert got["default"] == {"eta": 0.1} and got["given"] == {"eta": 0.25}

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
-from .contact.laws import law_params
+from .contact.law_params import law_params
 from .geometry.params import DAMPERS
 from .limits import (
     BAND_MAX_HZ,

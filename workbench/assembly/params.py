@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import load_record, param, read_toml
-from ..contact.laws import COMMON, LawParam, law_params
+from ..contact.law_params import COMMON, LawParam, law_params
 from ..errors import check_range
 
 DEFAULT_FILE = Path(__file__).resolve().parents[2] / "geometry" / "contact.toml"

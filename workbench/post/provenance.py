@@ -30,7 +30,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..contact.laws import law_params
+from ..contact.law_params import law_params
 
 ROOT = Path(__file__).resolve().parents[2]
 

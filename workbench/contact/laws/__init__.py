@@ -15,18 +15,7 @@ A law is a module of this package that defines
   ``Fs = df/ds`` (3, N_STATE), ``Su = ds_new/du`` (N_STATE, 3),
   ``Ss = ds_new/ds`` (N_STATE, N_STATE); it returns 0 (stuck), 1
   (slipping) or 2 (separated). The rest state is ``s = 0`` (no force, the
-  slider at ``u = 0``);
-* optionally ``PARAMS``: its own parameters beyond the friction coefficient
-  every law reads (:data:`COMMON`), a tuple of plain dicts with the fields of
-  :class:`LawParam` (``{"name": "eta", "help": "...", "unit": "", "lo": 0.0,
-  "hi": 1.0, "default": 0.1}``).
-
-A parameter is declared once, with its unit, range and default: the study
-options (``--mu``, ``--<name>``), the contact parameter files (``[contact]
-<name>`` of ``geometry/contact.toml``), the contact parameters record
-(:class:`workbench.assembly.params.ContactParams`), the assembly (one value
-per contact pair) and the report's Inputs table read it here
-(:func:`law_params`).
+  slider at ``u = 0``).
 
 The generic march (:mod:`workbench.contact.march`) runs any law over
 periods of samples until the state repeats and chains the derivatives;
@@ -51,25 +40,6 @@ SLIP_TOL = 1e-9
 
 
 @dataclass(frozen=True)
-class LawParam:
-    """One parameter of a contact law (per contact element, a float)."""
-
-    name: str  # the study option, the [contact] key and the report's key, e.g. "mu"
-    help: str  # what it is, for --help and the report ("friction coefficient")
-    unit: str = ""  # "" for a pure number
-    lo: float | None = None
-    hi: float | None = None
-    lo_open: bool = False
-    default: float = 0.0  # when neither the contact files nor the study set it
-
-
-# the parameters every law reads (``step``'s ``mu``: the slip limit is mu N)
-COMMON: tuple[LawParam, ...] = (
-    LawParam("mu", "friction coefficient", lo=0.0, hi=2.0, default=0.5),
-)
-
-
-@dataclass(frozen=True)
 class Law:
     """A registered contact law (see the package docstring).
 
@@ -83,7 +53,6 @@ class Law:
     n_state: int
     summary: str
     module_name: str
-    params: tuple[LawParam, ...] = COMMON  # the common ones, then its own
     _mod: list = field(default_factory=list, repr=False, compare=False)
 
     @property
@@ -99,14 +68,13 @@ class Law:
 
 
 def _constants(path: Path) -> tuple[dict[str, object], str]:
-    """The module-level constants (NAME, N_STATE, PARAMS) and the docstring of a law's
-    source (read without importing it: numba stays unloaded)."""
+    """The module-level constants (NAME, N_STATE) and the docstring of a law's source."""
     tree = ast.parse(path.read_text())
     out: dict[str, object] = {}
     for node in tree.body:
         if isinstance(node, ast.Assign) and len(node.targets) == 1:
             t = node.targets[0]
-            if isinstance(t, ast.Name) and t.id in ("NAME", "N_STATE", "PARAMS"):
+            if isinstance(t, ast.Name) and t.id in ("NAME", "N_STATE"):
                 out[t.id] = ast.literal_eval(node.value)
     return out, ast.get_docstring(tree) or ""
 
@@ -121,17 +89,7 @@ def _discover() -> dict[str, Law]:
         if "NAME" not in const or "N_STATE" not in const:
             raise ImportError(f"contact law module {path.name} must define NAME and N_STATE")
         lines = doc.strip().splitlines()
-        try:
-            own = tuple(LawParam(**p) for p in const.get("PARAMS", ()))
-        except TypeError as e:
-            raise ImportError(f"contact law module {path.name}: PARAMS: {e}") from None
-        law = Law(
-            str(const["NAME"]),
-            int(const["N_STATE"]),
-            lines[0] if lines else "",
-            path.stem,
-            (*COMMON, *own),
-        )
+        law = Law(str(const["NAME"]), int(const["N_STATE"]), lines[0] if lines else "", path.stem)
         found[law.name] = law
     return found
 
@@ -141,26 +99,6 @@ REGISTRY: dict[str, Law] = _discover()
 LAWS: tuple[str, ...] = tuple(
     sorted(REGISTRY, key=lambda n: (n != "decoupled", n != "circular", n))
 )
-
-
-def _all_params() -> tuple[LawParam, ...]:
-    out: dict[str, LawParam] = {}
-    for name in LAWS:
-        for p in REGISTRY[name].params:
-            if out.setdefault(p.name, p) != p:
-                raise ImportError(
-                    f"contact law '{name}' declares the parameter '{p.name}' unlike another "
-                    "law: one name, one declaration (same help, unit, range and default)"
-                )
-    return tuple(out.values())
-
-
-_PARAMS = _all_params()
-
-
-def law_params() -> tuple[LawParam, ...]:
-    """Every parameter of every registered law: the common ones, then each law's own."""
-    return _PARAMS
 
 
 def get_law(name: str) -> Law:
