@@ -54,17 +54,12 @@ class Sample:
 
 
 def nominal_contact(spec: StudySpec):
-    """The nominal contact parameters: the study's options, else geometry/contact.toml."""
+    """The nominal contact parameters: the study's options, else geometry/contact.toml (a
+    study's geometry file's ``[contact]`` table is not read here)."""
     from ....assembly.params import load_contact_params
+    from ....post.provenance import contact_args  # the options' map to the contact fields
 
-    return load_contact_params(
-        mu=spec.law["mu"],
-        cf_n=spec.cf,
-        kt_line_n_per_m2=spec.kt_line,
-        kn_line_n_per_m2=spec.kn_line,
-        kt_face_n_per_m3=spec.kt_face,
-        kn_face_n_per_m3=spec.kn_face,
-    )
+    return load_contact_params(**{**contact_args(spec.as_dict()), "geometry_file": None})
 
 
 def sample_settings(base: dict[str, Any], nominal, x: dict[str, float]) -> dict[str, Any]:
