@@ -95,3 +95,32 @@ def test_a_law_with_its_own_parameter_is_one_module(tmp_path):
     assert "eta" in got["refused"] and "1" in got["refused"]
     assert got["default"] == {"eta": 0.1} and got["given"] == {"eta": 0.25}
     assert got["source"] == "option" and got["keyed"] is True
+
+
+def test_a_laws_own_parameters_reach_the_contact_elements():
+    """Per pair in the assembled model, per element in the solver's contact record (kept
+    through concat and with_params); the step does not read them yet (the hbm end)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+    import scipy.sparse as sp
+
+    from workbench.assembly.model import AssembledModel
+    from workbench.contact.elements import ContactElements
+
+    pairs = SimpleNamespace(
+        W=sp.identity(6, format="csr"),
+        mu=np.full(2, 0.4),
+        kt=np.full(2, 10.0),
+        kn=np.full(2, 20.0),
+        n0=np.full(2, 1.0),
+        law={"eta": np.array([0.1, 0.2])},
+    )
+    el = AssembledModel.contact_elements(pairs)
+    assert el.law_params["eta"].tolist() == [0.1, 0.2] and el.mu.tolist() == [0.4, 0.4]
+    both = ContactElements.concat([el, el.with_params(law_params={"eta": 0.3})])
+    assert both.law_params["eta"].tolist() == [0.1, 0.2, 0.3, 0.3]
+    with pytest.raises(InputError, match="eta"):
+        el.with_params(law_params={"eta": [0.1, 0.2, 0.3]})  # one value per element
+    with pytest.raises(InputError, match="law_params"):
+        ContactElements.concat([el, el.with_params(law_params={})])

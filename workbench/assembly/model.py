@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from ..contact.elements import ContactElements
 from ..errors import InputError, check_range
 from ..geometry.records import ContactSet
 from ..reduced import ReducedModel
@@ -68,6 +69,19 @@ class AssembledModel:
     @property
     def n_pairs(self) -> int:
         return int(self.mu.shape[0])
+
+    def contact_elements(self) -> ContactElements:
+        """The contact pairs as the solver's contact elements (one tangential stiffness for
+        both directions; the laws' own parameters per pair)."""
+        return ContactElements(
+            W=self.W,
+            mu=self.mu,
+            kt1=self.kt,
+            kt2=self.kt,
+            kn=self.kn,
+            n0=self.n0,
+            law_params=self.law,
+        )
 
     def excitation(self, phase_deg: float) -> np.ndarray:
         """Complex harmonic-1 force per newton: blade 1 at 0 deg, blade 2 at ``phase_deg``.

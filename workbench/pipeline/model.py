@@ -67,7 +67,6 @@ def contact_params_for(case: Case):
 def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> PreparedModel:
     """Mesh, reduce and assemble the model of ``case`` (each stage cached on disk)."""
     from ..assembly.model import assemble
-    from ..contact.elements import ContactElements
     from ..fe.reduce import model_path, reduce_body
     from ..hbm.system import System
     from ..log import stage
@@ -111,10 +110,7 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
             excitation_direction=tuple(geom.excitation_direction),
             response_direction=tuple(geom.response_direction),
         )
-        contacts = ContactElements(
-            W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt, kn=model.kn, n0=model.n0
-        )
-        system = System(M=model.M, K=model.K, zeta=s["damping"], contacts=contacts)
+        system = System(M=model.M, K=model.K, zeta=s["damping"], contacts=model.contact_elements())
     return PreparedModel(geom, gdir, model, system, {}, timings, cparams, cached, reduced)
 
 

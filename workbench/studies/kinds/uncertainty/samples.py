@@ -145,7 +145,6 @@ def prepare_sample(base_prep, case: Case, tilt_deg: float):
     ``pipeline.prepare_model`` builds for the case.
     """
     from ....assembly.model import pair_params
-    from ....contact.elements import ContactElements
     from ....hbm.system import System
     from ....pipeline import PreparedModel, contact_params_for
     from .imperfection import open_share, tilted_preloads
@@ -166,9 +165,7 @@ def prepare_sample(base_prep, case: Case, tilt_deg: float):
             "open_share_at_rest": open_share(n0, contact.side),
         },
     )
-    contacts = ContactElements(
-        W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt, kn=model.kn, n0=model.n0
-    )
+    contacts = model.contact_elements()
     system = System(M=model.M, K=model.K, zeta=case.settings["damping"], contacts=contacts)
     timings = {"assembly (sample)": time.perf_counter() - t0}
     return PreparedModel(base_prep.geometry, base_prep.geometry_dir, model, system, {}, timings, cp)
