@@ -122,7 +122,7 @@ def _rig_wedge():
     prep = m.prepared
     from workbench.hbm import SolverOptions
     from workbench.pipeline import band_for
-    from workbench.studies.plan import make_case
+    from workbench.studies.engine.plan import make_case
 
     case = make_case("wedge", 180.0, 30.0, m.settings)
     band = band_for(prep, case)

@@ -10,7 +10,7 @@ From a finished uncertainty study (``--study DIR``, e.g. the output of
 2. reads the study's own run (``uncertainty.json``: ranks, schedule, busy
    and wall time): the measured efficiency ``busy / (P wall)``;
 3. replays the measured costs under ``mpirun -n 2`` through the study's own
-   scheduler (:func:`workbench.studies.uncertainty.run_tasks`), each task a
+   scheduler (:func:`workbench.studies.kinds.uncertainty.compute.run_tasks`), each task a
    ``sleep`` of its cost times ``--scale``, once round-robin (static) and
    once with the shared counter (dynamic), in the study's task order: the
    measured loss of static scheduling, free of the machine's load (a sleep
@@ -100,7 +100,7 @@ _REPLAY = """
 import json, sys, time
 from mpi4py import MPI
 sys.path.insert(0, {root!r})
-from workbench.studies.uncertainty import run_tasks, schedule_efficiency
+from workbench.studies.kinds.uncertainty.compute import run_tasks, schedule_efficiency
 costs = json.load(open({path!r}))
 scale = {scale!r}
 out = {{}}
@@ -151,7 +151,7 @@ def mpi_replay(costs: list[float], scale: float, ranks: int, tmp: Path) -> dict:
 
 
 def simulate(costs: list[float], ranks: int) -> dict:
-    from workbench.studies.schedule import simulate_schedule
+    from workbench.studies.engine.schedule import simulate_schedule
 
     total = float(sum(costs))
     st = simulate_schedule(costs, ranks, static=True)

@@ -301,7 +301,7 @@ def _int_options() -> list[tuple[str, str, list[str]]]:
     """(command, flag, base argv) of every whole-number option of every command."""
     from workbench.cli.main import build_parser
     from workbench.cli.values import value_actions
-    from workbench.study_options import OPTIONS
+    from workbench.studies.engine.spec import OPTIONS
 
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
     out = []
@@ -353,7 +353,7 @@ def test_every_whole_number_option_refuses_what_is_not_one(
 
 
 def _soft_options():
-    from workbench.study_options import OPTIONS
+    from workbench.studies.engine.spec import OPTIONS
 
     return [o for o in OPTIONS if o.soft_lo is not None or o.soft_hi is not None]
 
@@ -368,7 +368,7 @@ SOFT_BOUNDS = [
 
 @pytest.mark.parametrize("o, side", SOFT_BOUNDS, ids=[f"{o.name} {s}" for o, s in SOFT_BOUNDS])
 def test_a_physical_range_says_why_and_yields_to_allow_extreme(o, side):
-    from workbench.studies.spec import resolve
+    from workbench.studies.engine.spec import resolve
 
     bound = o.soft_hi if side == "above" else o.soft_lo
     v = bound * (1e3 if side == "above" else 1e-3)
@@ -386,7 +386,7 @@ def test_the_physical_options_are_all_bounded():
 
 
 def test_a_band_wider_than_a_decade_is_refused_unless_extreme():
-    from workbench.studies.spec import resolve
+    from workbench.studies.engine.spec import resolve
 
     with pytest.raises(InputError, match="hi <= 10 x lo"):
         resolve({"band-out-of-phase": [100.0, 2000.0]})
@@ -492,7 +492,7 @@ def _study_option_argv(o) -> list[str]:
 
 
 def _model_refused():
-    from workbench.study_options import OPTIONS
+    from workbench.studies.engine.spec import OPTIONS
 
     return [o for o in OPTIONS if o.name not in ("harmonics", "nt")]
 
@@ -543,7 +543,7 @@ def test_a_model_file_value_is_checked_although_the_command_line_overrides_it(
      ("levels-harmonics", "9-2"), ("uq-samples", "12")],
 )  # fmt: skip
 def test_an_option_the_study_kind_does_not_use_is_checked_all_the_same(kind, option, value):
-    from workbench.studies.spec import resolve
+    from workbench.studies.engine.spec import resolve
 
     extra = {"sweep": "mu", "sweep-values": [0.3]} if kind == "sweep" else {}
     with pytest.raises(InputError) as e:
@@ -620,8 +620,7 @@ def test_every_path_argument_is_covered():
 
 def test_the_help_states_the_range_of_every_numeric_option():
     from workbench.cli.main import build_parser
-    from workbench.studies.spec import range_text
-    from workbench.study_options import OPTIONS
+    from workbench.studies.engine.spec import OPTIONS, range_text
 
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
     study = {f"--{o.name}": o for o in OPTIONS}

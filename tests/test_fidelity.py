@@ -15,8 +15,9 @@ from tests.conftest import ROOT, assert_nonblank, run_upd
 from workbench.errors import InputError
 from workbench.post.fidelity import Setting
 from workbench.post.pareto import pareto_front, pick_cheapest
-from workbench.studies.fidelity_plan import propose_combination
-from workbench.studies.spec import parse_harmonics, resolve
+from workbench.studies.engine.spec import resolve
+from workbench.studies.kinds.fidelity.ladders import propose_combination
+from workbench.studies.kinds.fidelity.options import parse_harmonics
 
 # ---- Pareto front ---------------------------------------------------------------------------
 
@@ -140,8 +141,8 @@ def test_propose_combination_takes_the_coarsest_level_meeting_alone():
 
 @pytest.mark.parametrize("text, value", [("1%", 1.0), (" 0.5 %", 0.5), ("2", 2.0), (3, 3.0)])
 def test_tolerance_accepts_percent(text, value):
-    assert resolve({"tolerance": text}, "f.toml").tolerance == value
-    assert resolve(cli_values={"tolerance": text}).tolerance == value
+    assert resolve({"tolerance": text}, "f.toml").fidelity.tolerance == value
+    assert resolve(cli_values={"tolerance": text}).fidelity.tolerance == value
 
 
 @pytest.mark.parametrize("text", ["abc%", "%", "0%", "-1", "150%"])
@@ -186,22 +187,22 @@ def test_study_help_mentions_the_fidelity_options():
 
 
 def test_the_study_file_resolves():
-    from workbench.studies.fidelity_plan import plan_settings
-    from workbench.studies.spec import load_study
+    from workbench.studies.engine.spec import load_study
+    from workbench.studies.kinds.fidelity.ladders import plan_settings
 
     spec = load_study(ROOT / "studies" / "fidelity.toml", {"tolerance": "1%"})
-    assert spec.kind == "fidelity" and spec.tolerance == 1.0
+    assert spec.kind == "fidelity" and spec.fidelity.tolerance == 1.0
     settings, ladders = plan_settings(spec, "cone")
     ref = next(s for s in settings if s.role == "reference")
     assert ref.values == {
-        "mesh-size": min(spec.levels_mesh_size),
-        "modes": max(spec.levels_modes),
+        "mesh-size": min(spec.fidelity.levels_mesh_size),
+        "modes": max(spec.fidelity.levels_modes),
         "harmonics": list(range(8)),
-        "nt": max(spec.levels_nt),
-        "points-per-line": max(spec.levels_points_per_line),
+        "nt": max(spec.fidelity.levels_nt),
+        "points-per-line": max(spec.fidelity.levels_points_per_line),
         "rigid-damper": False,
     }
-    assert len(spec.levels_mesh_size) >= 4
+    assert len(spec.fidelity.levels_mesh_size) >= 4
     # every setting is distinct; one knob differs from the base in each ladder setting
     assert len({s.key for s in settings}) == len(settings)
     base = settings[0].values
@@ -231,8 +232,8 @@ TOL = "3%"
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
-    from workbench.studies.fidelity import run_fidelity
-    from workbench.studies.spec import load_study
+    from workbench.studies.engine.spec import load_study
+    from workbench.studies.kinds.fidelity.compute import run_fidelity
 
     d = tmp_path_factory.mktemp("fid")
     (d / "tiny.toml").write_text(TINY)
@@ -469,8 +470,8 @@ def test_fidelity_nonlinear_mode_entry(tmp_path):
     and its time is the base model's plus the backbone's."""
     from workbench.hbm.nlmodes.record import NlModeBranch
     from workbench.hbm.nlmodes.synthesis import synthesize
-    from workbench.studies.fidelity import run_fidelity
-    from workbench.studies.spec import load_study
+    from workbench.studies.engine.spec import load_study
+    from workbench.studies.kinds.fidelity.compute import run_fidelity
 
     (tmp_path / "tiny_nlm.toml").write_text(TINY_NLM)
     spec = load_study(tmp_path / "tiny_nlm.toml", {"tolerance": "3%"})

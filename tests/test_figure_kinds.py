@@ -19,12 +19,12 @@ from tests.synthetic import synthetic_study, synthetic_sweep
 from workbench.hbm.io.examples import sdof_jenkins
 from workbench.post.tables import curve_set
 from workbench.render import curves
-from workbench.render import fidelity_figures as ff
-from workbench.render import robustness_figures as rf
 from workbench.render import study_figures as sf
 from workbench.render.common import save_figure
 from workbench.render.status_figures import plot_status_map, plot_status_shares
 from workbench.render.sweep_figures import plot_sweep
+from workbench.studies.kinds.fidelity import figures as ff
+from workbench.studies.kinds.robustness import figures as rf
 
 UNIT = re.compile(r"\(([^)]*[A-Za-z%/][^)]*)\)|, (%|s|Hz|mm|mJ|N)$")
 COUNTS = {"contact pair number", "contact element", "stuck / 0"}

@@ -57,10 +57,30 @@ def test_layer_never_imports_studies(layer):
     assert not bad, f"workbench/{layer} imports workbench.studies:\n" + "\n".join(bad)
 
 
+def test_a_kinds_figures_and_report_take_plain_records():
+    """A study kind's folder holds its figures and report beside its computing; those two
+    draw what they are given, as ``render/`` does: they import ``render/``, ``post/`` and
+    each other, never the study engine, a kind's computing or another kind."""
+    bad = []
+    for p in sorted((PKG / "studies" / "kinds").glob("*/*.py")):
+        if p.stem not in ("figures", "report"):
+            continue
+        module = ".".join(p.relative_to(PKG.parent).with_suffix("").parts)
+        own = module.rpartition(".")[0]
+        bad += [
+            f"{p.relative_to(PKG.parent)}:{line}: {mod}"
+            for line, mod in imported_modules(p.read_text(), module)
+            if _is_studies(mod)
+            and not mod.startswith((f"{own}.figures", f"{own}.report"))
+            and mod != own  # "from . import figures"
+        ]
+    assert not bad, "a kind's figures or report import a study module:\n" + "\n".join(bad)
+
+
 def test_the_scan_sees_relative_local_and_package_imports():
     """A check of the check: every way of writing such an import is caught."""
     src = (
-        "import workbench.studies.spec\n"
+        "import workbench.studies.engine.spec\n"
         "from .. import studies\n"
         "def f():\n"
         "    from ..studies.spec import BY_NAME\n"
@@ -88,7 +108,7 @@ def test_nonlinear_mode_sources_do_not_key_the_forced_responses():
     """Everything under hbm/nlmodes/ is left out of the forced-response cache key (an edit
     to the backbone code must not recompute a study's cases), and no module of hbm/
     outside it imports it (so nothing that keys a forced response runs backbone code)."""
-    from workbench.studies.plan import NLMODE_PACKAGE
+    from workbench.studies.engine.plan import NLMODE_PACKAGE
 
     hbm = PKG / "hbm"
     nl = hbm / NLMODE_PACKAGE

@@ -1,4 +1,5 @@
-"""The worker pool that meshes and reduces a study's models at once (workbench.studies.prefetch).
+"""The worker pool that meshes and reduces a study's models at once
+(workbench.studies.engine.prefetch).
 
 * the pool writes the very models one process writes (bitwise) and the
   screen built on them is the same;
@@ -19,7 +20,7 @@ import numpy as np
 import pytest
 
 from workbench.errors import InputError
-from workbench.studies.prefetch import Task, _Scheduler, worker_count
+from workbench.studies.engine.prefetch import Task, _Scheduler, worker_count
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ROOT / "tests" / "studies" / "tiny.toml"
@@ -218,7 +219,7 @@ def test_a_task_error_survives_the_trip_back_from_a_worker(monkeypatch):
     the message."""
     import pickle
 
-    import workbench.studies.prefetch as pf
+    import workbench.studies.engine.prefetch as pf
 
     def boom(*args):
         raise InputError("points-per-line", 1, "a whole number >= 2")
@@ -235,7 +236,7 @@ def test_a_task_error_survives_the_trip_back_from_a_worker(monkeypatch):
 def test_an_error_while_planning_on_rank_0_is_raised_on_every_rank():
     """Under mpirun rank 0 plans alone; its error must reach the other ranks, which would
     otherwise wait in the next collective forever."""
-    from workbench.studies.prefetch import _on_root
+    from workbench.studies.engine.prefetch import _on_root
 
     class Comm:  # what rank 1 sees: rank 0's broadcast of its failure
         rank = 1

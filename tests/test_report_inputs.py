@@ -8,15 +8,18 @@ import pytest
 
 from workbench.post.inputs import used_inputs
 from workbench.render.report import render_html
-from workbench.studies.outputs import headline
-from workbench.studies.spec import load_study
+from workbench.studies.engine.outputs import headline
+from workbench.studies.engine.spec import load_study
+from workbench.studies.kinds import inputs_table
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _rows(path, **cli):
     s = load_study(ROOT / path, cli or None)
-    return {r["option"]: r for r in used_inputs(s.as_dict(), s.source)}
+    # the kind's rows come from its registry entry, as the study engine passes them
+    rows = used_inputs(s.as_dict(), s.source, table=inputs_table(s.kind))
+    return {r["option"]: r for r in rows}
 
 
 def test_comparison_shows_file_values_with_their_source():
@@ -55,6 +58,7 @@ def test_sweep_names_the_swept_values_and_wedge_only_face_stiffness():
     [
         ("studies/fidelity.toml", "levels-modes", "methods"),
         ("studies/robustness.toml", "hard-cases", "levels-modes"),
+        ("tests/studies/uncertainty_tiny.toml", "uq-samples", "hard-cases"),
     ],
 )
 def test_other_kinds_list_their_own_options(path, kept, dropped):
@@ -62,6 +66,14 @@ def test_other_kinds_list_their_own_options(path, kept, dropped):
     assert kept in rows and dropped not in rows
     assert all(r["value"] is not None for r in rows.values())
     assert not any(str(r["value"]).startswith("/") for r in rows.values())  # paths relative
+
+
+def test_units_come_from_the_option_declarations():
+    """Each row's unit is its option's declared unit (shared or the kind's own)."""
+    rows = _rows("studies/fidelity.toml")
+    assert rows["levels-nt"]["unit"] == "samples per period" and rows["modes"]["unit"] == "per body"
+    assert rows["damping"]["unit"] == "ratio" and rows["phases"]["unit"] == "deg"
+    assert _rows("studies/robustness.toml")["peak-tolerance"]["unit"] == "%"
 
 
 def test_report_table_has_unit_and_source(tmp_path):

@@ -75,8 +75,8 @@ def _study(tmp_path: Path, geo: Path):
     from workbench.pipeline import contact_params_for
     from workbench.post.provenance import solve_inputs
     from workbench.post.results import StudyResults
-    from workbench.studies.plan import plan
-    from workbench.studies.spec import load_study
+    from workbench.studies.engine.plan import plan
+    from workbench.studies.engine.spec import load_study
 
     spec = load_study(
         ROOT / "studies" / "paper_rig.toml",
@@ -93,7 +93,7 @@ def _study(tmp_path: Path, geo: Path):
 
 
 def test_a_changed_contact_in_the_geometry_file_reaches_every_output(tmp_path):
-    from workbench.studies.outputs import write_outputs
+    from workbench.studies.engine.outputs import write_outputs
 
     geo = _geometry_copy(tmp_path)
     spec, results = _study(tmp_path, geo)

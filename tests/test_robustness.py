@@ -18,17 +18,16 @@ from conftest import assert_nonblank, run_upd
 from workbench.errors import InputError, SolveError
 from workbench.hard_cases import CASES, METHODS
 from workbench.hbm.io.examples import sdof_jenkins, sdof_unilateral
-from workbench.studies import robustness as rb
-from workbench.studies.robustness_cells import ENERGY_TOL, Problem, classify, method_options
-from workbench.studies.robustness_time import (
+from workbench.studies.engine.spec import BY_NAME, resolve
+from workbench.studies.kinds.robustness import compute as rb
+from workbench.studies.kinds.robustness.cells import ENERGY_TOL, Problem, classify, method_options
+from workbench.studies.kinds.robustness.time_check import (
     TIME_MODELS,
     branch_amplitudes_at,
     compare_with_branch,
     time_check,
     turning_points,
 )
-from workbench.studies.spec import resolve
-from workbench.study_options import BY_NAME
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -171,7 +170,7 @@ def test_resume_recomputes_nothing(tmp_path, monkeypatch):
 
 
 def test_map_figure_is_not_blank(jenkins_cells, tmp_path):
-    from workbench.render.robustness_figures import plot_branches, plot_failure_map
+    from workbench.studies.kinds.robustness.figures import plot_branches, plot_failure_map
 
     cells = [dict(c) for c in jenkins_cells]
     cells[-1]["status"] = "failed"  # all three colours
@@ -238,7 +237,7 @@ def test_time_integration_confirms_the_light_damping_peak():
 
 @pytest.mark.slow
 def test_study_end_to_end_on_one_rig_case(tmp_path):
-    from workbench.studies.robustness import run_robustness
+    from workbench.studies.kinds.robustness.compute import run_robustness
 
     spec = resolve(
         {

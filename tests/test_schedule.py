@@ -7,7 +7,12 @@ from types import SimpleNamespace
 
 import pytest
 
-from workbench.studies.schedule import case_cost, run_tasks, schedule_efficiency, simulate_schedule
+from workbench.studies.engine.schedule import (
+    case_cost,
+    run_tasks,
+    schedule_efficiency,
+    simulate_schedule,
+)
 
 
 def _case(damper, phase, force, harmonics=(0, 1, 2, 3)):

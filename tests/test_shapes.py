@@ -42,7 +42,7 @@ def test_each_shape_has_its_toml_with_the_record_defaults(name):
 
 def test_the_damper_list_comes_from_the_registry():
     from workbench.render.study_style import DAMPER_STYLE
-    from workbench.study_options import BY_NAME
+    from workbench.studies.engine.spec import BY_NAME
 
     assert tuple(BY_NAME["dampers"].default) == shapes.names()
     assert BY_NAME["dampers"].choices == shapes.names()
@@ -105,7 +105,7 @@ def rod(tmp_path, monkeypatch):
 def test_a_new_shape_module_is_found_without_other_edits(rod):
     from workbench.pipeline import geometry_request
     from workbench.render.palette import damper_style
-    from workbench.studies.plan import Case
+    from workbench.studies.engine.plan import Case
 
     assert shapes.names() == ("cone", "cylinder", "wedge", "rod")
     gp = load_geometry_params("rod")  # its TOML, through the registry's record

@@ -1,4 +1,4 @@
-"""Full-mesh peak fields of a study (``--field-shapes``, workbench/studies/fields.py).
+"""Full-mesh peak fields of a study (``--field-shapes``, workbench/studies/engine/fields.py).
 
 Runs on a copy of conftest's tiny study (every case and model reused from
 its cache), so only the fields are computed. Checked, after reading the file

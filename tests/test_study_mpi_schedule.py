@@ -41,5 +41,5 @@ def test_two_ranks_share_the_cases_and_the_backbones_and_exit(tmp_path):
     assert len(sched["busy_per_rank_s"]) == 2 and 0 < sched["efficiency"] <= 1 + 1e-9
     assert summary["schedule"]["ranks"] == 2
     # the two backbones (one per family) were computed, one on each rank
-    assert "[1] I workbench.studies.nlmodes: backbone" in p.stderr
-    assert "[0] I workbench.studies.nlmodes: backbone" in p.stderr
+    assert "[1] I workbench.studies.engine.nlmodes: backbone" in p.stderr
+    assert "[0] I workbench.studies.engine.nlmodes: backbone" in p.stderr

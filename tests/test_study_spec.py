@@ -8,16 +8,15 @@ import pytest
 
 from tests.conftest import ROOT, run_upd
 from workbench.errors import InputError
-from workbench.studies.plan import plan
-from workbench.studies.spec import load_study, resolve
-from workbench.study_options import OPTIONS
+from workbench.studies.engine.plan import plan
+from workbench.studies.engine.spec import OPTIONS, load_study, resolve
 
 
 def test_cli_overrides_file_and_records_origin(tmp_path):
     f = tmp_path / "s.toml"
     f.write_text('forces = [1.0, 2.0]\nmu = 0.4\ndampers = ["cone"]\n')
     spec = load_study(f, {"mu": "0.3"})
-    assert spec.forces == [1.0, 2.0] and spec.mu == 0.3 and spec.dampers == ["cone"]
+    assert spec.forces == [1.0, 2.0] and spec.law["mu"] == 0.3 and spec.dampers == ["cone"]
     assert spec.source["mu"] == "command line" and spec.source["forces"] == str(f)
     assert spec.source["harmonics"] == "default"
 
@@ -135,7 +134,7 @@ def test_the_case_key_covers_every_source_that_shapes_a_curve(monkeypatch):
     the nonlinear modes), the assembly and the model pipeline is read into a case's
     cache key: editing any of them recomputes the cases."""
     import workbench.io as wio
-    from workbench.studies.plan import NLMODE_PACKAGE, solver_code_version
+    from workbench.studies.engine.plan import NLMODE_PACKAGE, solver_code_version
 
     read = set()
     real = wio.file_digest
@@ -166,3 +165,28 @@ def test_code_version_counts_sub_packages(tmp_path):
     v0 = code_version(tmp_path)
     (tmp_path / "sub" / "b.py").write_text("B = 2\n")
     assert code_version(tmp_path) != v0
+
+
+def test_the_spec_is_a_dataclass_with_each_option_in_one_place():
+    """Shared options are fields of the spec, a kind's own are fields of its record
+    (``spec.<kind>``), a contact law's parameters ``spec.law``; the file and the command
+    line still name them flat, and ``as_dict``/``replace`` see every one."""
+    import dataclasses
+
+    from workbench.studies.engine.spec import StudySpec
+    from workbench.studies.kinds.fidelity.options import FidelityOptions
+    from workbench.study_options import SharedOptions
+
+    names = {f.name for f in dataclasses.fields(StudySpec)}
+    assert {"forces", "mesh_size", "law", "kinds"} <= names and "levels_nt" not in names
+    assert issubclass(StudySpec, SharedOptions)
+    spec = resolve({"kind": "fidelity", "levels-nt": [16, 32], "mu": 0.3}, "f.toml")
+    assert isinstance(spec.fidelity, FidelityOptions) and spec.fidelity.levels_nt == [16, 32]
+    assert spec.law == {"mu": 0.3} and spec.source["levels-nt"] == "f.toml"
+    assert list(spec.as_dict()) == [o.name for o in OPTIONS]
+    assert spec.as_dict()["levels-nt"] == [16, 32] and spec.as_dict()["mu"] == 0.3
+    other = spec.replace(levels_nt=[8], mu=0.2, forces=[1.0])
+    assert (other.fidelity.levels_nt, other.law["mu"], other.forces) == ([8], 0.2, [1.0])
+    assert spec.fidelity.levels_nt == [16, 32]  # the original is unchanged
+    with pytest.raises(AttributeError):
+        _ = spec.no_such_kind

@@ -31,7 +31,7 @@ from tests.synthetic import synthetic_case, synthetic_study
 from workbench.errors import InputError, SolveError
 from workbench.io import LOCK_NAME, folder_lock
 from workbench.post.answer import cases_table
-from workbench.studies.outputs import check_failures, headline
+from workbench.studies.engine.outputs import check_failures, headline
 
 pytestmark = pytest.mark.xdist_group("resume")  # shares the tiny study of conftest
 CMD = [sys.executable, "-m", "workbench.cli.main", "study", str(TINY)]

@@ -26,10 +26,14 @@ from workbench.post.uncertainty import (
     sobol_indices,
     statistics,
 )
-from workbench.studies import uncertainty as U
-from workbench.studies.imperfection import seated_preloads, side_coordinate, tilted_preloads
-from workbench.studies.schedule import run_tasks, schedule_efficiency, simulate_schedule
-from workbench.studies.uq_samples import study_distributions
+from workbench.studies.engine.schedule import run_tasks, schedule_efficiency, simulate_schedule
+from workbench.studies.kinds.uncertainty import compute as U
+from workbench.studies.kinds.uncertainty.imperfection import (
+    seated_preloads,
+    side_coordinate,
+    tilted_preloads,
+)
+from workbench.studies.kinds.uncertainty.samples import study_distributions
 
 # ---- distributions and design ----------------------------------------------------------
 
@@ -216,7 +220,7 @@ def test_serial_run_tasks_counts_every_task_once():
 _DEMO = """
 import json, sys, time
 from mpi4py import MPI
-from workbench.studies.uncertainty import run_tasks, schedule_efficiency
+from workbench.studies.kinds.uncertainty.compute import run_tasks, schedule_efficiency
 costs = [0.02, 0.02, 0.02, 0.2] * 6
 out = {}
 for static in (True, False):
@@ -363,7 +367,7 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
     from types import SimpleNamespace
 
     from tests.conftest import assert_nonblank
-    from workbench.render.uncertainty_figures import uncertainty_figures
+    from workbench.studies.kinds.uncertainty.figures import uncertainty_figures
 
     dists = {
         "mu": parse_distribution("mu", "normal 0.5 0.1 0.25 0.75"),
@@ -383,7 +387,8 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
                 "failed": np.zeros(len(pk), bool),
                 "digests": [""] * len(pk),
             }
-    a = U.analyse(SimpleNamespace(uq_threshold=0.4, uq_seed=1), design, dists, res)
+    spec = SimpleNamespace(uncertainty=SimpleNamespace(uq_threshold=0.4, uq_seed=1))
+    a = U.analyse(spec, design, dists, res)
     assert a["robust"] == {"in-phase": "cone", "out-of-phase": "cone"}
     drivers = {(r["damper"], r["family"]): r["driver"] for r in a["groups"]}
     assert drivers[("cone", "in-phase")] == "mu" and drivers[("wedge", "in-phase")] == "seat-tilt"
@@ -406,7 +411,7 @@ def test_figures_and_analysis_on_synthetic_outputs(tmp_path):
 
 
 def test_bad_uncertainty_inputs_exit_2_before_any_work(tmp_path):
-    from workbench.studies.spec import resolve
+    from workbench.studies.engine.spec import resolve
 
     for values, needle in (
         ({"uq-mu": "gauss 0.5 0.1"}, "uq-mu"),

@@ -63,7 +63,7 @@ class Model:
         that file (as the report's Inputs table does).
         """
         from .post.inputs import used_inputs
-        from .studies.plan import MODEL_KEYS
+        from .studies.engine.plan import MODEL_KEYS
 
         return [
             r
@@ -73,7 +73,7 @@ class Model:
 
 
 def _options(options: dict[str, Any]) -> dict[str, Any]:
-    from .study_options import BY_NAME
+    from .studies.engine.spec import BY_NAME
 
     out = {}
     for key, v in options.items():
@@ -100,8 +100,8 @@ def model(damper: str = "cone", *, out: str | Path = "results/notebook", **optio
     (``harmonics``, ``nt``, ...) given here become the defaults of :func:`frf`.
     """
     from .pipeline import prepare_model
-    from .studies.plan import plan
-    from .studies.spec import resolve
+    from .studies.engine.plan import plan
+    from .studies.engine.spec import resolve
 
     values = _options(options)
     values.update(dampers=[damper], phases=[180.0], forces=[1.0])
@@ -123,9 +123,8 @@ def frf(m: Model, force_n: float, phase_deg: float = 180.0, **options: Any):
     """
     from .errors import check_range
     from .pipeline import solve_case
-    from .studies.plan import MODEL_KEYS, make_case
-    from .studies.spec import check_option
-    from .study_options import BY_NAME
+    from .studies.engine.plan import MODEL_KEYS, make_case
+    from .studies.engine.spec import BY_NAME, check_option
 
     values = _options(options)
     for k in values:
@@ -187,8 +186,8 @@ def study(
     **options: Any,
 ):
     """Run a study (a study TOML and/or options) as ``upd study`` does; the StudyResults."""
-    from .studies.runner import run_study
-    from .studies.spec import load_study
+    from .studies.engine.runner import run_study
+    from .studies.engine.spec import load_study
 
     spec = load_study(file, _options(options))
     return run_study(spec, Path(out), force=force)

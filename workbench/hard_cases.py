@@ -50,7 +50,7 @@ class HardCase:
     why: str
 
 
-# the robustness study's hard cases (workbench/studies/robustness.py solves them)
+# the robustness study's hard cases (workbench/studies/kinds/robustness/compute.py solves them)
 CASES: dict[str, HardCase] = {
     "near-separation": HardCase(
         "cone",

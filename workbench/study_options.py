@@ -1,23 +1,30 @@
-"""The study options table and the named robustness methods and hard cases (plain data).
+"""The study options every kind shares (plain data), and the :class:`Option` record.
 
-Every option of ``upd study`` is one :class:`Option` in :data:`OPTIONS`
-(name, type, default, help, allowed values, and the physical range of a
-real rig with its reason); :mod:`workbench.studies.spec`
-turns them into a :class:`~workbench.studies.spec.StudySpec` from a TOML
-file and the command line, and the figures read an option's help text for
-their axis labels. The robustness study's solution methods
-(:data:`METHODS`) and hard cases (:data:`CASES`) are named in
-:mod:`workbench.hard_cases` and listed here by the options that name them.
-Nothing here computes: it imports no study.
+Every option of ``upd study`` is declared once, with its name, type, default,
+help, allowed values, unit, role (what it shapes: the model, a case's solve,
+the cases themselves or only the study) and the physical range of a real rig
+with its reason. The options every study kind reads are the fields of
+:class:`SharedOptions` here (each ``name: type = option(...)``); a kind's own
+options are the fields of its record in its folder
+(``workbench/studies/kinds/<kind>/options.py``, reached through the kind
+registry); a contact law's parameters are declared by the law
+(``workbench/contact/laws/``) and become :data:`LAW_OPTIONS`.
+:mod:`workbench.studies.engine.spec` turns them into a
+:class:`~workbench.studies.engine.spec.StudySpec` (a subclass of
+:class:`SharedOptions`) from a TOML file and the command line; the parser,
+its help, the cache keys (``role``), the report's Inputs table
+(:func:`input_table`, ``unit``) and the figures' axis labels (:func:`find`)
+read these declarations. Nothing here computes: it imports no study.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
+from pathlib import Path
 from typing import Any
 
+from .contact.law_params import law_params
 from .geometry.params import DAMPERS
-from .hard_cases import CASES, METHODS
 from .limits import (
     BAND_MAX_HZ,
     BAND_WHY,
@@ -29,22 +36,18 @@ from .limits import (
     K_FACE_WHY,
     K_LINE_N_PER_M2,
     K_LINE_WHY,
-    UQ_THRESHOLD_MAX_MM,
-    UQ_THRESHOLD_WHY,
 )
 
-# the robustness study's names, for the options that list them
-ROBUSTNESS_METHODS = tuple(METHODS)
-ROBUSTNESS_CASES = tuple(CASES)
 __all__ = [
     "BY_NAME",
-    "KINDS",
+    "CASES",
     "OPTIONS",
+    "SHOWN",
     "Option",
+    "declare",
+    "find",
+    "input_table",
 ]
-
-
-KINDS = ("comparison", "sweep", "fidelity", "robustness", "uncertainty")
 
 
 @dataclass(frozen=True)
@@ -67,43 +70,84 @@ class Option:
     soft_hi: float | None = None
     why: str = ""
     power_of_2: bool = False  # an int that must be a power of 2
+    # what the option shapes: "model" (mesh, reduction, contact: the model's cache key),
+    # "solve" (a case's curve on that model: the solve's cache key), "case" (each case takes
+    # one of its values: damper, phase, force) or "study" (what is computed and shown)
+    role: str = "study"
 
     @property
     def attr(self) -> str:
         return self.name.replace("-", "_")
 
 
-OPTIONS: tuple[Option, ...] = (
-    # what to compute
-    Option("name", "str", "study", "a name for the study (report title, file names)", "study"),
+def option(kind: str, default: Any, help: str, group: str, **more: Any) -> Any:
+    """Declare a study option as a field of an options record (:class:`SharedOptions`, a
+    kind's own record): its :class:`Option` (name: the field's, dashes for underscores)
+    without its name, and its default (a list default is copied for each record)."""
+    meta = {"option": dict(kind=kind, default=default, help=help, group=group, **more)}
+    if isinstance(default, list):
+        return field(default_factory=lambda d=default: list(d), metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+def options_of(record: type) -> tuple[Option, ...]:
+    """The study options declared by the fields of ``record`` (see :func:`option`), in
+    field order."""
+    return tuple(
+        Option(f.name.replace("_", "-"), **f.metadata["option"])
+        for f in fields(record)
+        if "option" in f.metadata
+    )
+
+
+# a contact law's parameter: None is "the contact files' value" (geometry/contact.toml)
+LAW_OPTIONS: tuple[Option, ...] = tuple(
     Option(
-        "allow-extreme",
+        p.name,
+        "float",
+        None,
+        p.help,
+        "contact",
+        lo=p.lo,
+        hi=p.hi,
+        lo_open=p.lo_open,
+        optional=True,
+        unit=p.unit,
+        role="model",
+    )
+    for p in law_params()
+)
+
+
+@dataclass(frozen=True)
+class SharedOptions:
+    """The options every study kind shares, one field each (``spec.<name>``)."""
+
+    # what to compute
+    name: str = option("str", "study", "a name for the study (report title, file names)", "study")
+    allow_extreme: bool = option(
         "bool",
         False,
         "accept values beyond the physical ranges of a real rig (forces, cf, contact "
         "stiffness, bands, uq-threshold) for a numerical experiment; the numerical limits stay",
         "study",
-    ),
-    Option(
-        "kind",
-        "str",
-        "comparison",
-        "what the report shows: " + ", ".join(KINDS),
-        "study",
-        choices=KINDS,
-    ),
-    Option("dampers", "strs", list(DAMPERS), "dampers to compare", "cases", choices=DAMPERS),
-    Option(
-        "phases",
+    )
+    # its choices and help come from the kind registry (workbench/studies/kinds/)
+    kind: str = option("str", "comparison", "what the study computes", "study")
+    dampers: list[str] = option(
+        "strs", list(DAMPERS), "dampers to compare", "cases", choices=DAMPERS, role="case"
+    )
+    phases: list[float] = option(
         "floats",
         [0.0, 180.0],
         "inter-blade phase angles, deg (0 in-phase, 180 out-of-phase)",
         "cases",
         lo=-360.0,
         hi=360.0,
-    ),
-    Option(
-        "forces",
+        unit="deg",
+        role="case",
+    )
+    forces: list[float] = option(
         "floats",
         [0.096, 3.84, 9.6, 15.0, 20.0, 25.0, 30.0],
         "excitation force amplitudes on each blade, N",
@@ -113,13 +157,13 @@ OPTIONS: tuple[Option, ...] = (
         unit="N",
         soft_hi=FORCE_MAX_N,
         why=FORCE_WHY,
-    ),
-    Option(
-        "response-blade", "int", 1, "blade whose response is reported (1 or 2)", "cases", lo=1, hi=2
-    ),
+        role="case",
+    )
+    response_blade: int = option(
+        "int", 1, "blade whose response is reported (1 or 2)", "cases", lo=1, hi=2, role="solve"
+    )
     # frequency band
-    Option(
-        "band-in-phase",
+    band_in_phase: list[float] = option(
         "floats",
         [],
         "band of the in-phase family [lo, hi], Hz "
@@ -130,9 +174,9 @@ OPTIONS: tuple[Option, ...] = (
         unit="Hz",
         soft_hi=BAND_MAX_HZ,
         why=BAND_WHY,
-    ),
-    Option(
-        "band-out-of-phase",
+        role="solve",
+    )
+    band_out_of_phase: list[float] = option(
         "floats",
         [],
         "band of the out-of-phase family [lo, hi], Hz (empty: automatic)",
@@ -142,9 +186,9 @@ OPTIONS: tuple[Option, ...] = (
         unit="Hz",
         soft_hi=BAND_MAX_HZ,
         why=BAND_WHY,
-    ),
-    Option(
-        "band-margin",
+        role="solve",
+    )
+    band_margin: float = option(
         "float",
         0.04,
         "automatic band: relative margin beyond the linear limits",
@@ -152,11 +196,12 @@ OPTIONS: tuple[Option, ...] = (
         lo=0.0,
         lo_open=True,
         hi=0.5,
-    ),
+        unit="fraction",
+        role="solve",
+    )
     # contact and loads (None: geometry/contact.toml)
-    Option("mu", "float", None, "friction coefficient", "contact", lo=0.0, hi=2.0, optional=True),
-    Option(
-        "cf",
+    # (each contact law's parameters, declared in workbench/contact/laws/: spec.law[name])
+    cf: float | None = option(
         "float",
         None,
         "centrifugal force on the damper, N",
@@ -167,9 +212,9 @@ OPTIONS: tuple[Option, ...] = (
         unit="N",
         soft_hi=CF_MAX_N,
         why=CF_WHY,
-    ),
-    Option(
-        "kt-line",
+        role="model",
+    )
+    kt_line: float | None = option(
         "float",
         None,
         "tangential stiffness per metre of line (cone, cylinder), N/m per m",
@@ -181,9 +226,9 @@ OPTIONS: tuple[Option, ...] = (
         soft_lo=K_LINE_N_PER_M2[0],
         soft_hi=K_LINE_N_PER_M2[1],
         why=K_LINE_WHY,
-    ),
-    Option(
-        "kn-line",
+        role="model",
+    )
+    kn_line: float | None = option(
         "float",
         None,
         "normal stiffness per metre of line, N/m per m",
@@ -195,9 +240,9 @@ OPTIONS: tuple[Option, ...] = (
         soft_lo=K_LINE_N_PER_M2[0],
         soft_hi=K_LINE_N_PER_M2[1],
         why=K_LINE_WHY,
-    ),
-    Option(
-        "kt-face",
+        role="model",
+    )
+    kt_face: float | None = option(
         "float",
         None,
         "tangential stiffness per m^2 of face (wedge), N/m per m^2",
@@ -209,9 +254,9 @@ OPTIONS: tuple[Option, ...] = (
         soft_lo=K_FACE_N_PER_M3[0],
         soft_hi=K_FACE_N_PER_M3[1],
         why=K_FACE_WHY,
-    ),
-    Option(
-        "kn-face",
+        role="model",
+    )
+    kn_face: float | None = option(
         "float",
         None,
         "normal stiffness per m^2 of face (wedge), N/m per m^2",
@@ -223,19 +268,20 @@ OPTIONS: tuple[Option, ...] = (
         soft_lo=K_FACE_N_PER_M3[0],
         soft_hi=K_FACE_N_PER_M3[1],
         why=K_FACE_WHY,
-    ),
-    Option(
-        "damping",
+        role="model",
+    )
+    damping: float = option(
         "float",
         0.002,
         "modal damping ratio of the assembly (stuck contacts)",
         "contact",
         lo=0.0,
         hi=0.5,
-    ),
+        unit="ratio",
+        role="model",
+    )
     # modelling knobs (fidelity)
-    Option(
-        "mesh-size",
+    mesh_size: float | None = option(
         "float",
         None,
         "global mesh size, mm (None: the geometry file's)",
@@ -245,21 +291,22 @@ OPTIONS: tuple[Option, ...] = (
         hi=1000.0,
         optional=True,
         unit="mm",
-    ),
-    Option(
-        "modes",
+        role="model",
+    )
+    modes: int = option(
         "int",
         12,
         "fixed-interface modes per body (Craig-Bampton)",
         "fidelity",
         lo=0,
         hi=400,
-    ),
-    Option(
-        "rigid-damper", "bool", False, "rigid 6-DOF damper instead of Craig-Bampton", "fidelity"
-    ),
-    Option(
-        "points-per-line",
+        unit="per body",
+        role="model",
+    )
+    rigid_damper: bool = option(
+        "bool", False, "rigid 6-DOF damper instead of Craig-Bampton", "fidelity", role="model"
+    )
+    points_per_line: int | None = option(
         "int",
         None,
         "contact points per line (cone, cylinder)",
@@ -267,10 +314,13 @@ OPTIONS: tuple[Option, ...] = (
         lo=2,
         hi=400,
         optional=True,
-    ),
-    Option("harmonics", "ints", [0, 1, 2, 3], "harmonics of the balance", "fidelity", lo=0, hi=64),
-    Option(
-        "nt",
+        unit="per line",
+        role="model",
+    )
+    harmonics: list[int] = option(
+        "ints", [0, 1, 2, 3], "harmonics of the balance", "fidelity", lo=0, hi=64, role="solve"
+    )
+    nt: int | None = option(
         "int",
         None,
         "AFT time samples per period (None: solver default)",
@@ -278,18 +328,19 @@ OPTIONS: tuple[Option, ...] = (
         lo=4,
         hi=8192,
         optional=True,
-    ),
+        unit="samples per period",
+        role="solve",
+    )
     # geometry
-    Option(
-        "geometry",
+    geometry: Path | None = option(
         "path",
         None,
         "TOML overriding geometry tables (rig, cone, ...)",
         "geometry",
         optional=True,
-    ),
-    Option(
-        "cone-angle",
+        role="model",
+    )
+    cone_angle: float | None = option(
         "float",
         None,
         "cone semi-angle, deg (None: cone.toml's)",
@@ -298,261 +349,90 @@ OPTIONS: tuple[Option, ...] = (
         lo_open=True,
         hi=89.0,
         optional=True,
-    ),
+        unit="deg",
+        role="model",
+    )
     # solver
-    Option(
-        "max-points",
+    max_points: int = option(
         "int",
         400,
         "largest number of continuation points per curve",
         "solver",
         lo=5,
         hi=100000,
-    ),
-    Option("stability", "bool", True, "Hill stability of every point", "solver"),
-    Option(
-        "nonlinear-modes",
+        unit="points per curve",
+        role="solve",
+    )
+    stability: bool = option("bool", True, "Hill stability of every point", "solver", role="solve")
+    nonlinear_modes: bool = option(
         "bool",
         False,
         "comparison study: also one nonlinear mode "
         "(backbone) per damper and family, the forced responses synthesised from it and "
-        "their check against the curves (workbench/studies/nlmodes.py)",
+        "their check against the curves (workbench/studies/engine/nlmodes.py)",
         "solver",
-    ),
-    Option(
-        "field-shapes",
+    )
+    field_shapes: bool = option(
         "bool",
         False,
         "also write cases/<case>_peak_field.vtu: the displacement at each curve's peak on "
         "the full rig and damper meshes (ParaView; about one reduction's eigen solve per "
-        "damper, workbench/studies/fields.py)",
+        "damper, workbench/studies/engine/fields.py)",
         "solver",
-    ),
+    )
     # sweeps and the fidelity/robustness studies
-    Option(
-        "sweep",
+    sweep: str | None = option(
         "str",
         None,
         "name of a scalar option to sweep (e.g. cf, cone-angle, mu)",
         "sweep",
         optional=True,
-    ),
-    Option("sweep-values", "floats", [], "values of the swept option", "sweep"),
-    Option(
-        "tolerance",
-        "percent",
-        None,
-        "accepted error, percent ('1' or '1%%'): pick the "
-        "cheapest settings meeting it (fidelity studies)",
-        "fidelity",
-        lo=0.0,
-        lo_open=True,
-        hi=100.0,
-        optional=True,
-    ),
-    # ---- fidelity study options (kind = "fidelity"; workbench/studies/fidelity.py) ----
-    Option(
-        "knobs",
-        "strs",
-        ["mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"],
-        "knobs a fidelity study varies, one at a time about the base setting (the study's "
-        "own mesh-size, modes, ...)",
-        "fidelity",
-        choices=("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"),
-    ),
-    Option(
-        "levels-mesh-size",
-        "floats",
-        [14.0, 11.0, 9.0, 7.0],
-        "fidelity: global mesh sizes to try, mm (finest = smallest)",
-        "fidelity",
-        lo=0.0,
-        lo_open=True,
-    ),
-    Option(
-        "levels-modes",
-        "ints",
-        [4, 8, 12, 24, 40],
-        "fidelity: fixed-interface modes per body to try",
-        "fidelity",
-        lo=0,
-        hi=400,
-    ),
-    Option(
-        "levels-harmonics",
-        "strs",
-        ["1", "0-1", "0-3", "0-5", "0-7"],
-        "fidelity: harmonic sets to try, each 'a-b' (a range) or 'h+h+...' (a list)",
-        "fidelity",
-    ),
-    Option(
-        "levels-nt",
-        "ints",
-        [16, 32, 64, 128, 256, 512],
-        "fidelity: AFT time samples per period to try",
-        "fidelity",
-        lo=4,
-        hi=8192,
-    ),
-    Option(
-        "levels-points-per-line",
-        "ints",
-        [5, 11, 23, 33, 45],
-        "fidelity: contact points per line to try",
-        "fidelity",
-        lo=2,
-        hi=400,
-    ),
-    Option(
-        "levels-rigid-damper",
-        "strs",
-        ["rigid", "flexible"],
-        "fidelity: damper models to try (finest = flexible)",
-        "fidelity",
-        choices=("rigid", "flexible"),
-    ),
-    # ---- robustness study options (kind = "robustness"; workbench/studies/robustness.py) ----
-    Option(
-        "methods",
-        "strs",
-        list(ROBUSTNESS_METHODS),
-        "solution methods of a robustness "
-        "study (named solver variants; the first is the reference): "
-        + ", ".join(ROBUSTNESS_METHODS),
-        "robustness",
-        choices=ROBUSTNESS_METHODS,
-    ),
-    Option(
-        "hard-cases",
-        "strs",
-        list(ROBUSTNESS_CASES),
-        "hard cases of a robustness study: " + ", ".join(ROBUSTNESS_CASES),
-        "robustness",
-        choices=ROBUSTNESS_CASES,
-    ),
-    Option(
-        "peak-tolerance",
-        "float",
-        1.0,
-        "robustness: a method that converges but whose "
-        "peak amplitude differs from the first method's by more than this, percent, is a "
-        "wrong answer",
-        "robustness",
-        lo=0.0,
-        lo_open=True,
-        hi=100.0,
-    ),
-    Option(
-        "time-check",
-        "bool",
-        True,
-        "robustness: check the harmonic balance against time "
-        "integration at its suspect points (small models)",
-        "robustness",
-    ),
-    # ---- uncertainty study options (kind = "uncertainty"; workbench/studies/uncertainty.py) --
-    # a distribution is "uniform LO HI", "normal MEAN SD [LO HI]" or
-    # "lognormal MEDIAN SIGMA_LN [LO HI]" (bounds truncate); cf, kt, kn are factors on the
-    # nominal value (study option or geometry/contact.toml), mu and damping absolute values,
-    # seat-tilt the misalignment of one side's seat, deg
-    Option(
-        "uq-inputs",
-        "strs",
-        ["mu", "cf", "kt", "kn", "damping", "seat-tilt"],
-        "uncertainty: the inputs that vary (the others stay nominal)",
-        "uncertainty",
-        choices=("mu", "cf", "kt", "kn", "damping", "seat-tilt"),
-    ),
-    Option(
-        "uq-mu",
-        "str",
-        "normal 0.5 0.1 0.25 0.75",
-        "uncertainty: friction coefficient",
-        "uncertainty",
-    ),
-    Option(
-        "uq-cf",
-        "str",
-        "normal 1 0.1 0.7 1.3",
-        "uncertainty: factor on the nominal centrifugal force",
-        "uncertainty",
-    ),
-    Option(
-        "uq-kt",
-        "str",
-        "lognormal 1 0.5 0.25 4",
-        "uncertainty: factor on the nominal tangential contact stiffness (line and face)",
-        "uncertainty",
-    ),
-    Option(
-        "uq-kn",
-        "str",
-        "lognormal 1 0.5 0.25 4",
-        "uncertainty: factor on the nominal normal contact stiffness (line and face)",
-        "uncertainty",
-    ),
-    Option(
-        "uq-damping",
-        "str",
-        "lognormal 0.002 0.3 0.001 0.004",
-        "uncertainty: modal damping ratio",
-        "uncertainty",
-    ),
-    Option(
-        "uq-seat-tilt",
-        "str",
-        "normal 0 0.01 -0.03 0.03",
-        "uncertainty: seat "
-        "misalignment of one side, deg (tilts the preload along the line or face; "
-        "opens one end when large)",
-        "uncertainty",
-    ),
-    Option(
-        "uq-samples",
-        "int",
-        16,
-        "uncertainty: base samples N per damper and family "
-        "(Saltelli design: N (D + 2) cases; a power of 2; a larger N reuses a smaller)",
-        "uncertainty",
-        lo=2,
-        hi=1 << 20,
-        power_of_2=True,
-    ),
-    Option(
-        "uq-seed",
-        "int",
-        2026,
-        "uncertainty: seed of the scrambled Sobol sequence",
-        "uncertainty",
-        lo=0,
-        hi=2**31 - 1,
-    ),
-    Option(
-        "uq-threshold",
-        "float",
-        None,
-        "uncertainty: peak amplitude threshold, mm (the "
-        "report gives the probability of exceeding it; None: per family, 1.2 x the "
-        "median peak of every damper's samples)",
-        "uncertainty",
-        lo=0.0,
-        lo_open=True,
-        optional=True,
-        unit="mm",
-        soft_hi=UQ_THRESHOLD_MAX_MM,
-        why=UQ_THRESHOLD_WHY,
-    ),
-    Option(
-        "uq-schedule",
-        "str",
-        "dynamic",
-        "uncertainty: how samples spread over MPI ranks: "
-        "dynamic (a shared counter, each rank takes the next sample when free) or static "
-        "(round-robin, for comparison)",
-        "uncertainty",
-        choices=("dynamic", "static"),
-    ),
-)
+    )
+    sweep_values: list[float] = option("floats", [], "values of the swept option", "sweep")
 
+
+def _shared() -> tuple[Option, ...]:
+    """The shared options in --help order: the contact laws' parameters first in the
+    contact group."""
+    own = options_of(SharedOptions)
+    at = next(i for i, o in enumerate(own) if o.group == "contact")
+    return (*own[:at], *LAW_OPTIONS, *own[at:])
+
+
+OPTIONS: tuple[Option, ...] = _shared()
 
 BY_NAME = {o.name: o for o in OPTIONS}
+# options declared elsewhere (each study kind's own, by the kind registry when it finds them)
+_DECLARED: dict[str, Option] = {}
+
+
+def declare(options: tuple[Option, ...]) -> None:
+    """Make options declared outside this module (a study kind's own) known to
+    :func:`find` (figure labels and units read them there)."""
+    _DECLARED.update((o.name, o) for o in options)
+
+
+def find(name: str) -> Option | None:
+    """The declaration of study option ``name`` (dashes or underscores): a shared option or
+    a registered kind's own; None for an unknown name."""
+    key = name.replace("_", "-")
+    return BY_NAME.get(key) or _DECLARED.get(key)
+
+
+# the shared options a report's Inputs table lists by default besides the name, the kind and
+# the model and solver options (a kind names its own list: ``StudyKind.shows``)
+CASES = tuple(o.name for o in OPTIONS if o.group in ("cases", "band"))
+SHOWN = (*CASES, "field-shapes")
+
+
+def input_table(
+    shows: tuple[str, ...] = SHOWN, own: tuple[Option, ...] = ()
+) -> tuple[tuple[str, str], ...]:
+    """The rows ``(option, unit)`` of a report's Inputs table, in order: the study's name
+    and kind, the shared options ``shows``, a kind's own options ``own``, then the options
+    of the model and of the solver (each option's ``role``)."""
+    head = [BY_NAME[n] for n in ("name", "kind", *shows)]
+    model = [o for o in OPTIONS if o.role == "model"]
+    solver = [o for o in OPTIONS if o.role == "solve" and o.group not in ("cases", "band")]
+    rows = dict.fromkeys((o.name, o.unit) for o in (*head, *own, *model, *solver))
+    return tuple(rows)

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from ..contact.elements import ContactElements
 from ..errors import InputError, check_range
 from ..geometry.records import ContactSet
 from ..reduced import ReducedModel
@@ -58,6 +59,8 @@ class AssembledModel:
     n_rig: int  # q[:n_rig] are rig coordinates
     contact: ContactSet
     info: dict = field(default_factory=dict)
+    # each contact law's own parameters beyond mu (workbench/contact/laws/), per pair
+    law: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -66,6 +69,19 @@ class AssembledModel:
     @property
     def n_pairs(self) -> int:
         return int(self.mu.shape[0])
+
+    def contact_elements(self) -> ContactElements:
+        """The contact pairs as the solver's contact elements (one tangential stiffness for
+        both directions; the laws' own parameters per pair)."""
+        return ContactElements(
+            W=self.W,
+            mu=self.mu,
+            kt1=self.kt,
+            kt2=self.kt,
+            kn=self.kn,
+            n0=self.n0,
+            law_params=self.law,
+        )
 
     def excitation(self, phase_deg: float) -> np.ndarray:
         """Complex harmonic-1 force per newton: blade 1 at 0 deg, blade 2 at ``phase_deg``.
@@ -94,6 +110,20 @@ def preloads(contact: ContactSet, cf_n: float, mu: float, beta_deg: float) -> np
         w = contact.weight[on]
         n0[on] = n_side * w / w.sum()
     return n0
+
+
+def pair_params(contact: ContactSet, params: ContactParams, beta_deg: float) -> dict:
+    """The contact values of every pair (the :class:`AssembledModel` fields ``mu``, ``kt``,
+    ``kn``, ``n0`` and ``law``) from the per-unit contact parameters."""
+    kt, kn = params.pair_stiffness(contact.kind, contact.weight)
+    n = contact.n_pairs
+    return {
+        "mu": np.full(n, params.mu),
+        "kt": kt,
+        "kn": kn,
+        "n0": preloads(contact, params.cf_n, params.mu, beta_deg),
+        "law": {name: np.full(n, value) for name, value in params.law.items()},
+    }
 
 
 def _blade_rows(model: ReducedModel, set_name: str, direction: np.ndarray) -> np.ndarray:
@@ -153,8 +183,7 @@ def assemble(
     Wd = blocks.reshape(3 * np_, n)
     Wd[np.abs(Wd) < 1e-14 * np.abs(Wd).max()] = 0.0
     W = sp.csr_matrix(Wd)
-    kt, kn = params.pair_stiffness(contact.kind, contact.weight)
-    n0 = preloads(contact, params.cf_n, params.mu, beta_deg)
+    pairs = pair_params(contact, params, beta_deg)
     exc = np.zeros((2, n))
     exc[:, :nr] = _blade_rows(rig, "excitation", np.asarray(excitation_direction, float))
     resp = np.zeros((2, n))
@@ -163,10 +192,7 @@ def assemble(
         M=M,
         K=K,
         W=W,
-        mu=np.full(np_, params.mu),
-        kt=kt,
-        kn=kn,
-        n0=n0,
+        **pairs,
         excitation_dofs=exc,
         response_dofs=resp,
         n_rig=nr,
@@ -175,7 +201,7 @@ def assemble(
             "n_rig": nr,
             "n_damper": nd,
             "n_pairs": np_,
-            "total_preload_n": float(n0.sum()),
+            "total_preload_n": float(pairs["n0"].sum()),
             "rig_kind": rig.kind,
             "damper_kind": damper.kind,
         },

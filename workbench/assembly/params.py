@@ -9,21 +9,27 @@ value is the per-unit value times its tributary weight
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 import numpy as np
 
 from ..config import load_record, param, read_toml
+from ..contact.law_params import COMMON, LawParam, law_params
+from ..errors import check_range
 
 DEFAULT_FILE = Path(__file__).resolve().parents[2] / "geometry" / "contact.toml"
+# the contact laws' parameters (workbench/contact/laws/): "mu", every law's, is the field
+# ``mu``; a law's own parameters are the mapping ``law``
+_MU = next(p for p in COMMON if p.name == "mu")
+_OWN = tuple(p for p in law_params() if p not in COMMON)
 
 
 @dataclass(frozen=True)
 class ContactParams:
     """Friction contact parameters (file keys carry their units)."""
 
-    mu: float = param(0.5, "friction coefficient", lo=0.0, hi=2.0)
+    mu: float = param(_MU.default, _MU.help, lo=_MU.lo, hi=_MU.hi)
     kt_line_n_per_m2: float = param(
         5.0e8,
         "tangential stiffness per metre of contact line (cone, cylinder), N/m per m",
@@ -49,6 +55,19 @@ class ContactParams:
         lo_open=True,
     )
     cf_n: float = param(300.0, "centrifugal force on the damper (radial, +z), N", lo=0.0)
+    # each contact law's own parameters (beyond mu) by name: declared in its module, given in
+    # [contact] under that name; every declared one is here (its default when unset)
+    law: dict[str, float] = field(default_factory=dict, hash=False)
+
+    def law_param(self, name: str) -> float:
+        """The value of contact-law parameter ``name`` (``mu`` or a law's own)."""
+        return self.mu if name == "mu" else self.law[name]
+
+    def key(self) -> dict:
+        """The record as a cache key: its fields, the laws' own parameters only when some
+        law declares any (so the keys of the laws without stay what they were)."""
+        d = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "law"}
+        return {**d, "law": dict(self.law)} if self.law else d
 
     def pair_stiffness(self, kind: str, weight: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(kt, kn) in N/m for each pair of a ContactSet of ``kind`` with ``weight``."""
@@ -67,7 +86,12 @@ def load_contact_params(
     rig file (``geometry_file``: a rig calibrated with its own contact) < ``path`` (a
     contact file) < ``overrides`` (None values ignored)."""
     data, _ = _layers(path, geometry_file, overrides)
-    return load_record(ContactParams, data, "contact.")
+    own = {p.name: _law_value(p, data.pop(p.name, p.default)) for p in _OWN}
+    return replace(load_record(ContactParams, data, "contact."), law=own)
+
+
+def _law_value(p: LawParam, value: object) -> float:
+    return check_range(f"contact.{p.name}", value, p.lo, p.hi, lo_open=p.lo_open, unit=p.unit)
 
 
 def contact_sources(
@@ -79,7 +103,8 @@ def contact_sources(
     (``"<file> [contact]"``, the path as given) or "ContactParams default".
     """
     _, src = _layers(path, geometry_file, overrides)
-    return {f.name: src.get(f.name, "ContactParams default") for f in fields(ContactParams)}
+    names = [*(f.name for f in fields(ContactParams) if f.name != "law"), *(p.name for p in _OWN)]
+    return {n: src.get(n, "ContactParams default") for n in names}
 
 
 def _layers(path, geometry_file, overrides) -> tuple[dict, dict[str, str]]:

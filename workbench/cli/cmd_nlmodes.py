@@ -58,7 +58,7 @@ RANGE_WHY = (
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from ..limits import ENTRY_MAX
-    from ..studies.spec import add_arguments as add_study_options
+    from ..studies.engine.spec import add_arguments as add_study_options
     from .cmd_frf import add_levels_and_band
     from .values import Value, add_value
 
@@ -109,7 +109,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..config import read_toml
     from ..errors import InputError
-    from ..study_options import OPTIONS
+    from ..studies.engine.spec import OPTIONS
 
     if not args.file.is_file():
         raise InputError("FILE", str(args.file), "an existing model or study file (TOML)")
@@ -147,8 +147,7 @@ def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..hbm.nlmodes.synthesis import synthesize
     from ..io import write_json
     from ..render.nlmode_figures import plot_backbones, plot_synthesis
-    from ..studies.spec import check_option
-    from ..study_options import BY_NAME
+    from ..studies.engine.spec import BY_NAME, check_option
     from .cmd_frf import OVERRIDE_NAMES, overrides
 
     for name in MODEL_STUDY_OPTIONS:  # the study options' own rule
@@ -282,8 +281,8 @@ def _run_study(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..io import write_json
     from ..log import mpi_rank
     from ..post.tables import write_rows_csv
-    from ..studies.nlmodes import cost_rows, nlmode_sections, study_backbones
-    from ..studies.spec import cli_values, load_study
+    from ..studies.engine.nlmodes import cost_rows, nlmode_sections, study_backbones
+    from ..studies.engine.spec import cli_values, load_study
 
     spec = load_study(args.file, cli_values(args))
     if spec.kind not in ("comparison", "sweep"):

@@ -44,7 +44,7 @@ examples:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from ..studies.spec import add_arguments as add_study_options
+    from ..studies.engine.spec import add_arguments as add_study_options
 
     p.add_argument(
         "file",
@@ -64,9 +64,9 @@ def run(args: argparse.Namespace, ctx) -> dict:
     from ..log import mpi_rank
     from ..post.screen_table import table
     from ..post.tables import write_rows_csv
-    from ..studies.schedule import world_comm as _comm
-    from ..studies.screening import run_screen
-    from ..studies.spec import cli_values, load_study
+    from ..studies.engine.schedule import world_comm as _comm
+    from ..studies.engine.screening import run_screen
+    from ..studies.engine.spec import cli_values, load_study
 
     spec = load_study(args.file, cli_values(args))
     if spec.kind not in ("comparison", "sweep"):

@@ -29,7 +29,15 @@ examples:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from ..studies.spec import add_arguments as add_study_options
+    from ..studies.engine.spec import add_arguments as add_study_options
+    from ..studies.kinds import all_kinds
+
+    # the kinds come from the registry (workbench/studies/kinds/): one line each
+    p.description = (
+        (p.description or "")
+        + "\n\nstudy kinds (kind = ...):\n"
+        + "\n".join(f"  {k.name:<12} {k.description}" for k in all_kinds())
+    )
 
     p.add_argument(
         "file",
@@ -43,49 +51,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace, ctx) -> dict:
-    from ..studies.runner import study_lock
-    from ..studies.spec import cli_values, load_study
+    from ..studies.engine.runner import study_lock
+    from ..studies.engine.spec import cli_values, load_study
+    from ..studies.kinds import get as get_kind
 
     spec = load_study(args.file, cli_values(args))
     out = ctx.out_dir(f"results/{spec.name}")
     with study_lock(out):  # a second run on the same folder is refused at once
-        return _run(spec, out, args)
-
-
-def _run(spec, out: Path, args: argparse.Namespace) -> dict:
-    from ..studies.outputs import check_failures
-    from ..studies.runner import run_study
-
-    if spec.kind == "fidelity":  # knob ladders against a reference, Pareto front, --tolerance
-        from ..studies.fidelity import run_fidelity
-
-        return run_fidelity(spec, out, force=args.force)
-    if spec.kind == "robustness":  # solution methods x hard cases: the failure map
-        from ..studies.robustness import run_robustness
-
-        return run_robustness(spec, out, force=args.force)
-    if spec.kind == "uncertainty":  # sampled inputs: distributions, Sobol indices (MPI)
-        from ..studies.uncertainty import run_uncertainty
-
-        return run_uncertainty(spec, out, force=args.force)
-    results = run_study(spec, out, force=args.force)
-    summary = {
-        "study": spec.name,
-        "kind": spec.kind,
-        "out": str(out),
-        "report": str(out / "report.html"),
-        "n_cases": len(results.cases),
-        "n_computed": results.extras.get("n_computed"),
-        "n_reused": results.extras.get("n_reused"),
-        "peak_not_reached": [c.case_id for c in results.uncovered()],
-        "timings_s": {k: round(v, 2) for k, v in results.timings.items()},
-        # the cases' schedule: each rank's busy time and busy / (ranks x wall)
-        "schedule": {
-            k: (round(v, 3) if isinstance(v, float) else v)
-            for k, v in (results.extras.get("schedule") or {}).items()
-            if k != "records"
-        },
-        "cases": results.summaries(),
-    }
-    check_failures(results, summary)
-    return summary
+        return get_kind(spec.kind).run(spec, out, args.force)

@@ -15,7 +15,7 @@ zero rows in ``W``; an element against the ground has no platform columns.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
@@ -52,7 +52,9 @@ class ContactElements:
     elements, slip limit ``mu N`` on each tangential axis, as in the study of
     the conical damper), "circular" (one slip limit ``|T| <= mu N`` in the
     tangent plane) or any other law of :mod:`workbench.contact.laws`
-    ("dahl": smooth friction).
+    ("dahl": smooth friction). ``law_params``: the values per element of
+    each law's own parameters beyond ``mu`` (declared in the law's module,
+    :mod:`workbench.contact.law_params`), by name.
     """
 
     W: sp.csr_matrix
@@ -62,6 +64,7 @@ class ContactElements:
     kn: np.ndarray
     n0: np.ndarray
     law: str = "decoupled"
+    law_params: dict[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         W = sp.csr_matrix(self.W, dtype=float)
@@ -71,6 +74,8 @@ class ContactElements:
         object.__setattr__(self, "W", W)
         for name in ("mu", "kt1", "kt2", "kn", "n0"):
             object.__setattr__(self, name, _per_element(name, getattr(self, name), n_el))
+        own = {k: _per_element(k, v, n_el, -np.inf) for k, v in self.law_params.items()}
+        object.__setattr__(self, "law_params", own)
         check_choice("law", self.law, LAWS)
         if not np.all(np.isfinite(W.data)):
             raise InputError("contact W", "non-finite entries", "finite numbers")
@@ -190,6 +195,9 @@ class ContactElements:
         n = {p.n_dofs for p in parts}
         if len(n) > 1:
             raise InputError("contact W", sorted(n), "the same number of columns in every group")
+        own = {tuple(sorted(p.law_params)) for p in parts}
+        if len(own) > 1:
+            raise InputError("law_params", sorted(own), "the same law parameters in every group")
         return cls(
             W=sp.vstack([p.W for p in parts]).tocsr(),
             mu=np.concatenate([p.mu for p in parts]),
@@ -198,16 +206,26 @@ class ContactElements:
             kn=np.concatenate([p.kn for p in parts]),
             n0=np.concatenate([p.n0 for p in parts]),
             law=parts[0].law,
+            law_params={
+                k: np.concatenate([p.law_params[k] for p in parts]) for k in parts[0].law_params
+            },
         )
 
     def with_params(self, **changes: object) -> ContactElements:
-        """A copy with some of mu, kt1, kt2, kn, n0, law replaced."""
+        """A copy with some of mu, kt1, kt2, kn, n0, law, law_params replaced."""
         kw = dict(
-            W=self.W, mu=self.mu, kt1=self.kt1, kt2=self.kt2, kn=self.kn, n0=self.n0, law=self.law
+            W=self.W,
+            mu=self.mu,
+            kt1=self.kt1,
+            kt2=self.kt2,
+            kn=self.kn,
+            n0=self.n0,
+            law=self.law,
+            law_params=self.law_params,
         )
         for k, v in changes.items():
             if k not in kw or k == "W":
-                raise InputError(k, v, "one of mu, kt1, kt2, kn, n0, law")
+                raise InputError(k, v, "one of mu, kt1, kt2, kn, n0, law, law_params")
             kw[k] = v
         return ContactElements(**kw)
 

@@ -4,7 +4,7 @@ Every study kind, the API and the CLI get their models here: :func:`prepare_mode
 meshes, reduces and assembles the model of a case (each stage cached on disk
 under ``out/cache``), :func:`band_for` picks its frequency band and
 :func:`solve_case` computes its frequency response. A *case* is any object
-with the attributes of :class:`workbench.studies.plan.Case` (``damper``,
+with the attributes of :class:`workbench.studies.engine.plan.Case` (``damper``,
 ``phase_deg``, ``force_n``, ``variant``, ``name``, ``digest`` and the option
 values in ``settings``); this package never imports the studies.
 """
@@ -19,7 +19,7 @@ from typing import Any
 from ..io import digest
 from ..post.results import CaseResult
 
-Case = Any  # a workbench.studies.plan.Case (see the module docstring)
+Case = Any  # a workbench.studies.engine.plan.Case (see the module docstring)
 
 
 @dataclass
@@ -35,7 +35,7 @@ class PreparedModel:
     contact_params: Any = None
     # stage -> what it cost when it was computed, for the stages reused from the cache
     cached: dict[str, float] = field(default_factory=dict)
-    # the reduced models ("rig", "damper"), for full-mesh fields (studies/fields.py)
+    # the reduced models ("rig", "damper"), for full-mesh fields (studies/engine/fields.py)
     reduced: dict[str, Any] = field(default_factory=dict)
 
 
@@ -67,7 +67,6 @@ def contact_params_for(case: Case):
 def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> PreparedModel:
     """Mesh, reduce and assemble the model of ``case`` (each stage cached on disk)."""
     from ..assembly.model import assemble
-    from ..contact.elements import ContactElements
     from ..fe.reduce import model_path, reduce_body
     from ..hbm.core.system import System
     from ..log import stage
@@ -111,10 +110,7 @@ def prepare_model(case: Case, out: Path, *, force: bool = False, comm=None) -> P
             excitation_direction=tuple(geom.excitation_direction),
             response_direction=tuple(geom.response_direction),
         )
-        contacts = ContactElements(
-            W=model.W, mu=model.mu, kt1=model.kt, kt2=model.kt, kn=model.kn, n0=model.n0
-        )
-        system = System(M=model.M, K=model.K, zeta=s["damping"], contacts=contacts)
+        system = System(M=model.M, K=model.K, zeta=s["damping"], contacts=model.contact_elements())
     return PreparedModel(geom, gdir, model, system, {}, timings, cparams, cached, reduced)
 
 

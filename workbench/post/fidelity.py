@@ -6,8 +6,8 @@ reference. This module holds the knob vocabulary (names, labels, which
 level is finer), the error measures (``relative_errors``, ``worst``,
 ``ladder_self_errors``) and one table row per setting (``setting_row``).
 It is plain data on computed :class:`~workbench.post.results.CaseResult`
-records: the study (``workbench.studies.fidelity``) fills it, the report
-(``workbench.render.fidelity_report``) draws it.
+records: the study (``workbench.studies.kinds.fidelity.compute``) fills it, the report
+(``workbench.studies.kinds.fidelity.report``) draws it.
 """
 
 from __future__ import annotations

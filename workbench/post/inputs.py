@@ -10,104 +10,17 @@ study's kind and dampers.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from ..geometry.shapes import all_shapes
 from ..geometry.shapes import get as get_shape
 from ..geometry.shapes import names as shape_names
-from .provenance import _rel_source, rel
+from ..study_options import input_table
+from .provenance import _rel_source, contact_fields, contact_value, rel
 
 ROOT = Path(__file__).resolve().parents[2]
-
-UNITS: dict[str, str] = {
-    "phases": "deg",
-    "forces": "N",
-    "response-blade": "",
-    "band-in-phase": "Hz",
-    "band-out-of-phase": "Hz",
-    "band-margin": "fraction",
-    "mu": "",
-    "cf": "N",
-    "kt-line": "N/m per m",
-    "kn-line": "N/m per m",
-    "kt-face": "N/m per m^2",
-    "kn-face": "N/m per m^2",
-    "damping": "ratio",
-    "mesh-size": "mm",
-    "modes": "per body",
-    "points-per-line": "per line",
-    "harmonics": "",
-    "nt": "samples per period",
-    "cone-angle": "deg",
-    "max-points": "points per curve",
-    "tolerance": "%",
-    "levels-mesh-size": "mm",
-    "levels-nt": "samples per period",
-    "levels-points-per-line": "per line",
-    "levels-modes": "per body",
-    "peak-tolerance": "%",
-}
-
-_MODEL = (
-    "mu",
-    "cf",
-    "kt-line",
-    "kn-line",
-    "kt-face",
-    "kn-face",
-    "damping",
-    "mesh-size",
-    "modes",
-    "rigid-damper",
-    "points-per-line",
-    "cone-angle",
-    "geometry",
-)
-_SOLVE = ("harmonics", "nt", "max-points", "stability")
-_CASES = (
-    "dampers",
-    "phases",
-    "forces",
-    "response-blade",
-    "band-in-phase",
-    "band-out-of-phase",
-    "band-margin",
-)
-KIND_OPTIONS: dict[str, tuple[str, ...]] = {
-    "comparison": ("name", "kind", *_CASES, *_MODEL, *_SOLVE, "field-shapes"),
-    "sweep": ("name", "kind", "sweep", "sweep-values", *_CASES, *_MODEL, *_SOLVE, "field-shapes"),
-    "fidelity": (
-        "name",
-        "kind",
-        "dampers",
-        "phases",
-        "forces",
-        "tolerance",
-        "knobs",
-        "levels-mesh-size",
-        "levels-modes",
-        "levels-harmonics",
-        "levels-nt",
-        "levels-points-per-line",
-        "levels-rigid-damper",
-        *_MODEL,
-        *_SOLVE,
-    ),
-    "robustness": (
-        "name",
-        "kind",
-        "methods",
-        "hard-cases",
-        "peak-tolerance",
-        "time-check",
-        "response-blade",
-        "band-margin",
-        *_MODEL,
-        *_SOLVE,
-    ),
-}
-
 
 _rel = rel
 
@@ -120,18 +33,24 @@ def _origin(source: str) -> str:
 
 
 def used_inputs(
-    values: dict[str, Any], sources: dict[str, str] | None = None, kind: str | None = None
+    values: dict[str, Any],
+    sources: dict[str, str] | None = None,
+    kind: str | None = None,
+    table: Sequence[tuple[str, str]] | None = None,
 ) -> list[dict[str, Any]]:
     """Rows ``{option, value, unit, source}`` for the options of this study kind.
 
     ``values`` are the spec's options (``StudySpec.as_dict()``), ``sources``
-    where each came from (``StudySpec.source``).
+    where each came from (``StudySpec.source``), ``table`` the rows
+    ``(option, unit)`` to list (the study engine gives the kind's, read from
+    its registry entry; None: the comparison's,
+    :func:`workbench.study_options.input_table`).
     """
     from ..assembly.params import ContactParams, contact_sources, load_contact_params
 
     sources = sources or {}
     kind = kind or values.get("kind", "comparison")
-    names = KIND_OPTIONS.get(kind, KIND_OPTIONS["comparison"])
+    table = tuple(table) if table is not None else input_table()
     dampers = list(values.get("dampers") or [])
     if kind == "robustness":
         from ..hard_cases import CASES
@@ -154,21 +73,14 @@ def used_inputs(
     cp: ContactParams = load_contact_params(geometry_file=geo_file)
     csrc = contact_sources(geometry_file=geo_file)
     contact_default = {
-        opt: (getattr(cp, f), f"default: {_rel_source(csrc[f])}")
-        for f, opt in (
-            ("mu", "mu"),
-            ("cf_n", "cf"),
-            ("kt_line_n_per_m2", "kt-line"),
-            ("kn_line_n_per_m2", "kn-line"),
-            ("kt_face_n_per_m3", "kt-face"),
-            ("kn_face_n_per_m3", "kn-face"),
-        )
+        opt: (contact_value(cp, f), f"default: {_rel_source(csrc[f])}")
+        for f, opt in contact_fields()
     }
     sweep = values.get("sweep") if kind == "sweep" else None
 
     shape_options = {o for sh in all_shapes() for o in sh.study_options}
     rows = []
-    for name in names:
+    for name, unit in table:
         if name in skip:
             continue
         v = values.get(name)
@@ -189,10 +101,12 @@ def used_inputs(
             v = _rel(v) if v else "geometry/rig.toml + geometry/<damper>.toml"
         elif v is None and name == "tolerance":
             v = "none (no pick)"
+        elif v is None:  # an optional kind option left unset: its help says what then
+            v = "not set"
         elif name in ("band-in-phase", "band-out-of-phase") and not v:
             v = "automatic"
             src = f"{src}: linear stuck and sliding limits +- band-margin"
-        rows.append({"option": name, "value": v, "unit": UNITS.get(name, ""), "source": src})
+        rows.append({"option": name, "value": v, "unit": unit, "source": src})
     return rows
 
 
@@ -256,7 +170,10 @@ def _option_of(key: str, damper: str) -> str | None:
 
 
 def study_inputs(
-    cases: list[Any], values: dict[str, Any], sources: dict[str, str] | None = None
+    cases: list[Any],
+    values: dict[str, Any],
+    sources: dict[str, str] | None = None,
+    table: Sequence[tuple[str, str]] | None = None,
 ) -> list[dict[str, Any]]:
     """The report's Inputs rows: the study's own options, then every input the solve of
     its cases recorded (``CaseResult.inputs``), grouped (``group``: Study, Contact, Model,
@@ -270,7 +187,7 @@ def study_inputs(
 
     sources = sources or {}
     recorded = [c for c in cases if getattr(c, "inputs", None)]
-    base = used_inputs(values, sources)
+    base = used_inputs(values, sources, table=table)
     if not recorded:
         return [dict(r, group="Study and model (resolved again from the files)") for r in base]
     rows = [dict(r, group="Study") for r in base if r["option"] not in RECORDED_OPTIONS]

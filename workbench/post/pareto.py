@@ -3,8 +3,8 @@
 Plain selection on numbers, no solving: :func:`pareto_front` finds the
 settings that no other beats in both compute time and error, and
 :func:`pick_cheapest` the cheapest row whose worst error meets a tolerance.
-Used by the fidelity study (``workbench.studies.fidelity``) and its charts
-(``workbench.render.fidelity_figures``).
+Used by the fidelity study (``workbench.studies.kinds.fidelity.compute``) and its charts
+(``workbench.studies.kinds.fidelity.figures``).
 """
 
 from __future__ import annotations

@@ -30,6 +30,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from ..contact.law_params import law_params
+
 ROOT = Path(__file__).resolve().parents[2]
 
 GROUPS = {
@@ -42,7 +44,8 @@ GROUPS = {
 }
 
 _CONTACT = (  # ContactParams field, study option, key, label, unit, contact kind
-    ("mu", "mu", "mu", "friction coefficient", "1", None),
+    # the contact laws' parameters (mu, then each law's own), as each law declares them
+    *((p.name, p.name, p.name, p.help, p.unit or "1", None) for p in law_params()),
     ("cf_n", "cf", "cf", "centrifugal load on the damper", "N", None),
     (
         "kt_line_n_per_m2",
@@ -109,6 +112,16 @@ def contact_args(settings: Mapping[str, Any]) -> dict[str, Any]:
     }
 
 
+def contact_value(cp: Any, field: str) -> float:
+    """A ContactParams value by its field name or contact-law parameter name."""
+    return float(cp.law[field] if field in getattr(cp, "law", {}) else getattr(cp, field))
+
+
+def contact_fields() -> tuple[tuple[str, str], ...]:
+    """(ContactParams field or law parameter, study option) of every contact value."""
+    return tuple((field, opt) for field, opt, *_ in _CONTACT)
+
+
 def _contact(cp: Any, settings: Mapping[str, Any], kind: str) -> dict[str, dict]:
     from ..assembly.params import contact_sources, load_contact_params
 
@@ -123,7 +136,7 @@ def _contact(cp: Any, settings: Mapping[str, Any], kind: str) -> dict[str, dict]
         if only is not None and only != kind:
             continue
         where = src[field] if same else "as the model was built (its files changed since)"
-        out[key] = _e(float(getattr(cp, field)), unit, where, label, "contact")
+        out[key] = _e(contact_value(cp, field), unit, where, label, "contact")
     return out
 
 

@@ -1,6 +1,6 @@
 """The coupling screen's table: columns, cell formats, header and cells from screen rows.
 
-Plain formatting of the rows of :mod:`workbench.studies.screening` (one
+Plain formatting of the rows of :mod:`workbench.studies.engine.screening` (one
 per model and phase), shared by ``upd screen`` and the study report.
 """
 

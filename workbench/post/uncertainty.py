@@ -4,8 +4,8 @@ Plain numbers, no solving: an input's :class:`Distribution` (parsed from the
 study file), the Saltelli :class:`Design` (SALib) and its rows, the
 statistics of an output over the design (percentiles, exceedance), SALib's
 Sobol indices, and the answer tables built from an analysis. The study
-(``workbench.studies.uncertainty``) computes the samples; the figures
-(``workbench.render.uncertainty_figures``) and the report draw these.
+(``workbench.studies.kinds.uncertainty.compute``) computes the samples; the figures
+(``workbench.studies.kinds.uncertainty.figures``) and the report draw these.
 """
 
 from __future__ import annotations

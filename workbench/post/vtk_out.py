@@ -227,7 +227,7 @@ def write_case_peak(
 
 
 def write_case_field(path: str | Path, case, rig, damper, fields: dict[str, list]) -> Path:
-    """Rig and damper meshes with a case's peak displacement (see workbench/studies/fields.py).
+    """Rig and damper meshes with a case's peak displacement (workbench/studies/engine/fields.py).
 
     ``rig``/``damper``: BodyShapes (points, VTK cells); ``fields``: "cos",
     "sin" and optionally "mean", each [rig (n, 3), damper (n, 3)] in m.

@@ -22,11 +22,12 @@ from .study_style import DAMPER_STYLE, FAMILY_STYLE, _dampers, _readable_log, _w
 
 
 def option_label(option: str) -> tuple[str, str]:
-    """(description, unit) of a study option from its help text, e.g. ("centrifugal force
-    on the damper", "N"); ("option", "-") for an unknown one."""
-    from ..study_options import BY_NAME
+    """(description, unit) of a study option (a shared one or a registered kind's own) from
+    its help text and unit, e.g. ("centrifugal force on the damper", "N"); ("option", "-")
+    for an unknown one."""
+    from ..study_options import find
 
-    o = BY_NAME.get(option) or BY_NAME.get(option.replace("_", "-"))
+    o = find(option)
     if o is None:
         return option, "-"
     text = o.help
@@ -39,7 +40,7 @@ def option_label(option: str) -> tuple[str, str]:
         name, unit = text.rsplit(", ", 1)
         if len(unit) <= 12:
             return name.strip(), unit.strip()
-    return text, "-"
+    return text, o.unit or "-"
 
 
 def _axis_label(option: str) -> str:

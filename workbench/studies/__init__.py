@@ -1,9 +1,9 @@
-"""Study runner: a study file (TOML) -> cases -> cached results -> figures and report.
+"""Studies: a study file (TOML) -> cases -> cached results -> figures and report.
 
-A study file's keys are the ``upd study`` option names (``forces``,
-``phases``, ``mesh-size`` ...); the command line overrides the file;
-unknown keys are refused with a hint naming the closest valid one. Each
-case (one damper, one inter-blade phase, one excitation level, one set of
-modelling knobs) is cached under a hash of its canonical parameters, so a
-study that was interrupted resumes where it stopped.
+``engine/`` is what every study kind shares: the specification (options from
+defaults, a TOML file and the command line), the plan of cases and their cache
+keys, the case runner with resume, lock and MPI scheduling, the model prefetch
+and the outputs (manifest and report). ``kinds/`` holds one folder per study
+kind (comparison, sweep, fidelity, robustness, uncertainty), each registered
+by name: its own options, its computing, its figures and its report.
 """

@@ -1,0 +1,298 @@
+"""Charts of the fidelity study: error against compute time (matplotlib, Agg).
+
+* :func:`plot_knob`: one knob's levels, one panel per quantity (peak
+  amplitude, resonance frequency, friction energy per cycle), log-log,
+  one line per condition (force colours as the other study figures), every
+  point labelled with its level;
+* :func:`plot_pareto`: every measured setting of every knob together, one
+  panel per quantity plus the worst of the three, each with its Pareto
+  front (non-dominated settings) drawn as a step line, the tolerance as a
+  horizontal line and the picked setting circled.
+
+Errors of exactly zero (the reference itself) or below :data:`ERR_FLOOR`
+percent have no place on a log axis and are not drawn as if they were
+1e-4 %: open markers sit on the bottom edge of the axes, in a band labelled
+"< 1e-4 % (reference: 0)". An axis whose values span less than a factor 3
+(compute times of settings that cost the same) is linear, so its ticks read
+distinct values.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import weakref
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from ....render.common import pyplot, save_figure, styled
+from ....render.palette import force_colors
+from ....render.study_style import _EXTRA_COLORS, FIGSIZE
+
+ERR_FLOOR = 1e-4  # percent
+QUANTITY_TITLES = {
+    "peak_amplitude_mm": "peak amplitude",
+    "peak_frequency_hz": "resonance frequency",
+    "friction_energy_mj": "friction energy per cycle",
+    "worst": "worst of the three",
+}
+KNOB_COLORS = {
+    "mesh-size": "#1f6fb4",
+    "modes": "#ff7f0e",
+    "harmonics": "#2ca02c",
+    "nt": "#9467bd",
+    "points-per-line": "#8c564b",
+    "rigid-damper": "#e377c2",
+    "base": "#000000",
+    "combined": "#d62728",
+}
+KNOB_MARKERS = {
+    "mesh-size": "o",
+    "modes": "s",
+    "harmonics": "^",
+    "nt": "v",
+    "points-per-line": "D",
+    "rigid-damper": "P",
+    "base": "*",
+    "combined": "X",
+}
+
+
+EDGE_Y = 0.035  # axes fraction of the bottom band of errors below the floor
+EDGE_TEXT = f"< {ERR_FLOOR:g} % (reference: 0)"
+_EDGE_LABELLED: weakref.WeakSet = weakref.WeakSet()  # axes whose bottom band is labelled
+
+
+def _floor(e: float | None) -> tuple[float | None, bool]:
+    """(value to draw, below the floor): below the floor there is no value to draw."""
+    if e is None or not math.isfinite(e):
+        return None, False
+    return (None, True) if e < ERR_FLOOR else (e, False)
+
+
+def _edge(ax, xs: Sequence[float], **kw) -> None:
+    """Open markers on the bottom edge of ``ax`` at data x: errors below the floor."""
+    if not xs:
+        return
+    from matplotlib.transforms import blended_transform_factory
+
+    tr = blended_transform_factory(ax.transData, ax.transAxes)
+    ax.plot(list(xs), [EDGE_Y] * len(xs), ls="none", transform=tr, clip_on=False, **kw)
+    if ax not in _EDGE_LABELLED:
+        ax.text(
+            0.01,
+            2.2 * EDGE_Y,
+            EDGE_TEXT,
+            transform=ax.transAxes,
+            fontsize=6.5,
+            color="0.35",
+            va="bottom",
+        )
+        _EDGE_LABELLED.add(ax)
+
+
+def _log_axes(ax) -> None:
+    """Log-log axes with plain number labels (1, 2, 5 x 10^k; three ticks on a narrow range)."""
+    import numpy as np
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter, ScalarFormatter
+
+    fmt = FuncFormatter(lambda v, _: f"{v:.3g}")
+    for name in ("x", "y"):
+        lo, hi = sorted(ax.dataLim.intervalx if name == "x" else ax.dataLim.intervaly)
+        if lo > 0 and hi / lo >= 3.0:
+            getattr(ax, f"set_{name}scale")("log")
+        else:  # a narrow range: linear, with as many digits as the ticks need
+            getattr(ax, f"{name}axis").set_major_formatter(ScalarFormatter(useOffset=False))
+    if getattr(ax, "_edge_labelled", False):  # room under the data for the below-floor band
+        lo, hi = ax.get_ylim()
+        if ax.get_yscale() == "log" and lo > 0:
+            ax.set_ylim(lo / (hi / lo) ** 0.15, hi)
+        else:
+            ax.set_ylim(lo - 0.15 * (hi - lo), hi)
+        ax.plot(
+            [0, 1], [2 * EDGE_Y, 2 * EDGE_Y], color="0.6", lw=0.8, ls=":", transform=ax.transAxes
+        )
+    for axis, lim in ((ax.xaxis, ax.get_xlim()), (ax.yaxis, ax.get_ylim())):
+        if axis.get_scale() != "log":
+            continue
+        axis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        axis.set_major_formatter(fmt)
+        axis.set_minor_formatter(NullFormatter())
+        lo, hi = sorted(lim)
+        ticks = [t for t in axis.get_major_locator().tick_values(lo, hi) if lo <= t <= hi]
+        if len(ticks) < 2 and lo > 0:
+            axis.set_ticks([float(f"{t:.2g}") for t in np.geomspace(lo, hi, 3)])
+            axis.set_major_formatter(fmt)
+
+
+def _force_of(cond: str) -> float:
+    m = re.search(r"([-+0-9.eE]+) N$", cond)
+    return float(m.group(1)) if m else 0.0
+
+
+@styled
+def plot_knob(
+    knob: str,
+    levels: Sequence[str],
+    times_s: Sequence[float],
+    errors: dict[str, dict[str, Sequence[float | None]]],
+    path: str | Path,
+) -> Path:
+    """Error vs time of one knob's levels: ``errors[quantity][condition][level]`` in percent."""
+    plt = pyplot()
+    qs = list(errors)
+    fig, axes = plt.subplots(1, len(qs), figsize=(FIGSIZE[0] * 1.6, FIGSIZE[1] * 0.95))
+    axes = list(axes) if len(qs) > 1 else [axes]
+    conds = list(next(iter(errors.values()))) if errors else []
+    colors = force_colors([_force_of(c) for c in conds])
+    for ax, q in zip(axes, qs, strict=True):
+        for cond in conds:
+            col = colors[_force_of(cond)]
+            xs, ys, low = [], [], []
+            for t, e in zip(times_s, errors[q][cond], strict=True):
+                y, fl = _floor(e)
+                if fl:
+                    low.append(t)
+                if y is None:
+                    continue
+                xs.append(t)
+                ys.append(y)
+            ax.plot(xs, ys, "-o", color=col, lw=1.3, ms=5, label=cond)
+            _edge(ax, low, marker="o", ms=5, mfc="white", mec=col)
+        _log_axes(ax)
+        for i, (t, lab) in enumerate(zip(times_s, levels, strict=True)):
+            ys = [_floor(errors[q][c][i])[0] for c in conds]
+            ys = [y for y in ys if y is not None]
+            if ys:
+                ax.annotate(
+                    lab, (t, max(ys)), textcoords="offset points", xytext=(3, 4), fontsize=7
+                )
+            else:  # every condition below the floor: label it on the edge
+                from matplotlib.transforms import blended_transform_factory
+
+                ax.annotate(
+                    lab,
+                    (t, EDGE_Y),
+                    textcoords="offset points",
+                    xytext=(3, 4),
+                    fontsize=7,
+                    xycoords=blended_transform_factory(ax.transData, ax.transAxes),
+                )
+        ax.set_xlabel("compute time of the setting, s")
+        ax.set_ylabel(f"{QUANTITY_TITLES.get(q, q)} error, %")
+        ax.set_title(QUANTITY_TITLES.get(q, q), fontsize=10)
+    axes[0].legend(title="condition", loc="best")
+    fig.suptitle(f"{knob}: error vs compute time (other knobs at the base setting)", fontsize=11)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def pareto_indices(times: Sequence[float], errs: Sequence[float | None]) -> list[int]:
+    """Non-dominated (time, error) points, cheapest first (see post.pareto.pareto_front)."""
+    from ....post.pareto import pareto_front
+
+    return pareto_front(list(zip(times, errs, strict=True)))
+
+
+@styled
+def plot_pareto(
+    points: Sequence[dict[str, Any]],
+    path: str | Path,
+    *,
+    tolerance_pct: float | None = None,
+    picked: str | None = None,
+    reference_time_s: float | None = None,
+) -> Path:
+    """All settings: error vs time per quantity and the worst error, with the Pareto fronts.
+
+    ``points``: dicts with ``label``, ``group`` (the knob moved, "base" or
+    "combined"), ``time_s`` and the errors in percent under the quantity
+    keys and ``worst`` (None when the setting could not be compared).
+    ``reference_time_s``: drawn as a vertical line (the reference has no
+    error to draw).
+    """
+    plt = pyplot()
+    qs = ["peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj", "worst"]
+    fig, axes = plt.subplots(2, 2, figsize=(FIGSIZE[0] * 1.5, FIGSIZE[1] * 1.6))
+    groups = list(dict.fromkeys(p["group"] for p in points))
+    extra = iter(_EXTRA_COLORS)
+    gcol = {g: KNOB_COLORS.get(g) or next(extra, "#7f7f7f") for g in groups}
+    for ax, q in zip(axes.ravel(), qs, strict=True):
+        for g in groups:
+            sel = [p for p in points if p["group"] == g]
+            xs, ys, low = [], [], []
+            for p in sel:
+                y, f = _floor(p.get(q))
+                if f:
+                    low.append(p["time_s"])
+                if y is not None:
+                    xs.append(p["time_s"])
+                    ys.append(y)
+            m = KNOB_MARKERS.get(g, "o")
+            if xs:
+                ax.scatter(
+                    xs,
+                    ys,
+                    marker=m,
+                    s=34,
+                    label=g,
+                    facecolors=gcol[g],
+                    edgecolors=gcol[g],
+                    zorder=3,
+                )
+            _edge(ax, low, marker=m, ms=6, mfc="white", mec=gcol[g], label=None if xs else g)
+        front = pareto_indices([p["time_s"] for p in points], [p.get(q) for p in points])
+        front = [i for i in front if _floor(points[i][q])[0] is not None]
+        if front:
+            fx = [points[i]["time_s"] for i in front]
+            fy = [_floor(points[i][q])[0] for i in front]
+            ax.step(
+                fx, fy, where="post", color="0.2", lw=1.2, ls="--", zorder=2, label="Pareto front"
+            )
+            for i in front:
+                ax.annotate(
+                    points[i]["label"],
+                    (points[i]["time_s"], _floor(points[i][q])[0]),
+                    textcoords="offset points",
+                    xytext=(3, -9),
+                    fontsize=6.5,
+                )
+        if reference_time_s is not None:
+            ax.axvline(
+                reference_time_s,
+                color="0.45",
+                lw=1.0,
+                ls="-.",
+                label=f"reference ({reference_time_s:.0f} s)",
+            )
+        if q == "worst" and tolerance_pct is not None:
+            ax.axhline(
+                tolerance_pct,
+                color="#d62728",
+                lw=1.0,
+                ls=":",
+                label=f"tolerance {tolerance_pct:g} %",
+            )
+        if picked is not None and q == "worst":
+            for p in points:
+                y = _floor(p.get(q))[0]
+                if p["label"] == picked and y is not None:
+                    ax.scatter(
+                        [p["time_s"]],
+                        [y],
+                        s=180,
+                        facecolors="none",
+                        edgecolors="#d62728",
+                        lw=1.8,
+                        zorder=4,
+                        label="picked",
+                    )
+        _log_axes(ax)
+        ax.set_xlabel("compute time of the setting, s")
+        ax.set_ylabel(f"{QUANTITY_TITLES[q]} error, %")
+        ax.set_title(QUANTITY_TITLES[q] + (" (max over conditions)"), fontsize=10)
+    axes[1, 1].legend(loc="best", fontsize=7)
+    fig.suptitle("every setting: error vs compute time, with the Pareto front", fontsize=11)
+    fig.tight_layout()
+    return save_figure(fig, path)

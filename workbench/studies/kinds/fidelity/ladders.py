@@ -1,0 +1,152 @@
+"""Planning a fidelity study: knob levels from the study file, the settings to solve.
+
+Parses the ``levels-<knob>`` options, resolves the base setting's 'file
+default' values to numbers, lays out the unique settings (the base, one
+ladder per varied knob, the reference: every varied knob at its finest
+level) and proposes a combination of per-knob levels for a tolerance.
+Nothing here solves; ``workbench.studies.kinds.fidelity.compute`` computes the settings.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from ....errors import InputError
+from ....post.fidelity import Setting, fineness, level_label
+from ...engine.spec import StudySpec
+from .options import parse_harmonics
+
+
+def base_values(spec: StudySpec, damper: str) -> dict[str, Any]:
+    """The base setting's knob values, with 'file default' (None) resolved to numbers."""
+    from ....geometry import load_geometry_params
+    from ....hbm.core.fourier import default_nt
+
+    v = {
+        "mesh-size": spec.mesh_size,
+        "modes": int(spec.modes),
+        "harmonics": sorted(int(h) for h in spec.harmonics),
+        "nt": spec.nt,
+        "points-per-line": spec.points_per_line,
+        "rigid-damper": bool(spec.rigid_damper),
+    }
+    if v["mesh-size"] is None or v["points-per-line"] is None:
+        gp = load_geometry_params(damper, spec.geometry)
+        if v["mesh-size"] is None:
+            v["mesh-size"] = float(gp.rig.mesh.size_mm)
+        if v["points-per-line"] is None:
+            v["points-per-line"] = int(getattr(gp.shape, "n_contact_points", 0)) or None
+    if v["nt"] is None:
+        v["nt"] = default_nt(tuple(v["harmonics"]))
+    return v
+
+
+def knob_levels(spec: StudySpec) -> dict[str, list[Any]]:
+    """knob -> its levels (settings values), coarsest first, for the knobs the study varies."""
+    raw = {
+        "mesh-size": [float(x) for x in spec.fidelity.levels_mesh_size],
+        "modes": [int(x) for x in spec.fidelity.levels_modes],
+        "harmonics": [parse_harmonics(x) for x in spec.fidelity.levels_harmonics],
+        "nt": [int(x) for x in spec.fidelity.levels_nt],
+        "points-per-line": [int(x) for x in spec.fidelity.levels_points_per_line],
+        "rigid-damper": [x == "rigid" for x in spec.fidelity.levels_rigid_damper],
+    }
+    out: dict[str, list[Any]] = {}
+    for knob in spec.fidelity.knobs:
+        levels = raw[knob]
+        if not levels:
+            raise InputError(
+                f"levels-{knob}", levels, f"at least one level (or drop {knob} from knobs)"
+            )
+        keys = [json.dumps(x) for x in levels]
+        if len(set(keys)) != len(keys):
+            raise InputError(
+                f"levels-{knob}",
+                getattr(spec.fidelity, f"levels_{knob}".replace("-", "_")),
+                "distinct levels",
+            )
+        out[knob] = sorted(levels, key=lambda x, k=knob: fineness(k, x))
+    return out
+
+
+def _settings_dict(base: dict[str, Any], values: dict[str, Any]) -> dict[str, Any]:
+    s = dict(base)
+    for k, v in values.items():
+        s[k] = list(v) if isinstance(v, list) else v
+    return s
+
+
+def plan_settings(spec: StudySpec, damper: str) -> tuple[list[Setting], dict[str, list[Setting]]]:
+    """The unique settings (base, one-knob ladders, reference) and each knob's ladder."""
+    base_v = base_values(spec, damper)
+    levels = knob_levels(spec)
+    unique: dict[str, Setting] = {}
+
+    def add(values: dict[str, Any], label: str, role: str) -> Setting:
+        st = Setting(label, values, role)
+        if st.key in unique:
+            return unique[st.key]
+        unique[st.key] = st
+        return st
+
+    base = add(dict(base_v), "base", "base")
+    base.members.append(("base", "base"))
+    ladders: dict[str, list[Setting]] = {}
+    for knob, lv in levels.items():
+        ladders[knob] = []
+        for v in lv:
+            vals = dict(base_v, **{knob: v})
+            st = add(vals, level_label(knob, v), "knob")
+            st.members.append((knob, level_label(knob, v)))
+            ladders[knob].append(st)
+    ref_v = dict(base_v)
+    for knob, lv in levels.items():
+        ref_v[knob] = max(lv + [base_v[knob]], key=lambda x, k=knob: fineness(k, x))
+    ref = add(ref_v, "reference", "reference")
+    ref.role, ref.label = "reference", "reference"  # may coincide with a knob's finest level
+    ref.members.append(("reference", "reference"))
+    for st in unique.values():
+        _check_sampling(st.values)
+    return list(unique.values()), ladders
+
+
+def _check_sampling(v: dict[str, Any]) -> None:
+    if v["nt"] <= 2 * max(v["harmonics"]):
+        raise InputError(
+            "levels-nt",
+            v["nt"],
+            f"nt > 2 * max(harmonics) = "
+            f"{2 * max(v['harmonics'])} for every setting (sampling theorem)",
+        )
+
+
+def propose_combination(
+    ladders: dict[str, list[Setting]],
+    tolerance_pct: float,
+    shift: int = 0,
+    errors: dict[str, list[float | None]] | None = None,
+) -> tuple[dict[str, Any], dict[str, str]] | None:
+    """Per knob, the coarsest level whose error meets the tolerance (``shift`` levels finer).
+
+    ``errors``: knob -> the error of each level (percent, coarsest first);
+    default: each one-knob setting's error against the reference. Returns
+    (knob -> value, knob -> why) or None when a knob has no level meeting
+    the tolerance.
+    """
+    values: dict[str, Any] = {}
+    why: dict[str, str] = {}
+    for knob, ladder in ladders.items():
+        errs = errors[knob] if errors is not None else [st.error() for st in ladder]
+        idx = [i for i, e in enumerate(errs) if e is not None and e <= tolerance_pct]
+        if not idx:
+            return None
+        i = min(idx[0] + shift, len(ladder) - 1)
+        values[knob] = ladder[i].values[knob]
+        e = errs[i]
+        why[knob] = (
+            f"{level_label(knob, values[knob])} ({e:.3g} %)"
+            if e is not None
+            else level_label(knob, values[knob])
+        )
+    return values, why

@@ -1,0 +1,112 @@
+"""The fidelity study's own options: the knobs it varies, their levels and the tolerance.
+
+Declared once here; ``upd study`` (parser and help), the study specification,
+the report's input table and docs/STUDIES.md read them through the kind
+registry (:mod:`workbench.studies.kinds`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from ....errors import InputError
+from ....study_options import option
+
+
+@dataclass(frozen=True)
+class FidelityOptions:
+    """The fidelity study's own options, one field each (``spec.fidelity.<name>``)."""
+
+    tolerance: float | None = option(
+        "percent",
+        None,
+        "accepted error, percent ('1' or '1%%'): pick the "
+        "cheapest settings meeting it (fidelity studies)",
+        "fidelity",
+        lo=0.0,
+        lo_open=True,
+        hi=100.0,
+        optional=True,
+        unit="%",
+    )
+    knobs: list[str] = option(
+        "strs",
+        ["mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"],
+        "knobs a fidelity study varies, one at a time about the base setting (the study's "
+        "own mesh-size, modes, ...)",
+        "fidelity",
+        choices=("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"),
+    )
+    levels_mesh_size: list[float] = option(
+        "floats",
+        [14.0, 11.0, 9.0, 7.0],
+        "fidelity: global mesh sizes to try, mm (finest = smallest)",
+        "fidelity",
+        lo=0.0,
+        lo_open=True,
+        unit="mm",
+    )
+    levels_modes: list[int] = option(
+        "ints",
+        [4, 8, 12, 24, 40],
+        "fidelity: fixed-interface modes per body to try",
+        "fidelity",
+        lo=0,
+        hi=400,
+        unit="per body",
+    )
+    levels_harmonics: list[str] = option(
+        "strs",
+        ["1", "0-1", "0-3", "0-5", "0-7"],
+        "fidelity: harmonic sets to try, each 'a-b' (a range) or 'h+h+...' (a list)",
+        "fidelity",
+    )
+    levels_nt: list[int] = option(
+        "ints",
+        [16, 32, 64, 128, 256, 512],
+        "fidelity: AFT time samples per period to try",
+        "fidelity",
+        lo=4,
+        hi=8192,
+        unit="samples per period",
+    )
+    levels_points_per_line: list[int] = option(
+        "ints",
+        [5, 11, 23, 33, 45],
+        "fidelity: contact points per line to try",
+        "fidelity",
+        lo=2,
+        hi=400,
+        unit="per line",
+    )
+    levels_rigid_damper: list[str] = option(
+        "strs",
+        ["rigid", "flexible"],
+        "fidelity: damper models to try (finest = flexible)",
+        "fidelity",
+        choices=("rigid", "flexible"),
+    )
+
+
+def parse_harmonics(text: Any, param: str = "levels-harmonics") -> list[int]:
+    """'1' -> [1]; '0-3' -> [0, 1, 2, 3]; '1+3+5' -> [1, 3, 5]. Must contain 1."""
+    allowed = "'a-b' (a range) or 'h+h+...' (a list) of harmonics >= 0 containing 1"
+    s = str(text).strip()
+    try:
+        if "-" in s:
+            a, b = (int(x) for x in s.split("-"))
+            hs = list(range(a, b + 1))
+        else:
+            hs = [int(x) for x in s.split("+")]
+    except ValueError:
+        raise InputError(param, text, allowed) from None
+    if not hs or 1 not in hs or min(hs) < 0 or len(set(hs)) != len(hs) or max(hs) > 64:
+        raise InputError(param, text, allowed)
+    return sorted(hs)
+
+
+def check(spec: Any) -> None:
+    """Every harmonic set of ``levels-harmonics`` parses."""
+    for i, text in enumerate(spec.fidelity.levels_harmonics):
+        parse_harmonics(text, f"levels-harmonics[{i}]")
