@@ -190,3 +190,26 @@ def pattern_table(runs: dict, variants: dict) -> None:
             f"{c:.2f} | "
             f"{ends / c:.2f} | {une:.2f} | {lim:.2f} |"
         )
+
+
+def same_kg_table(runs: dict, levels, base, key) -> None:
+    """Points per line with the contact mesh scaled to hold n h: the quadrature alone."""
+    found = []
+    for n, h in levels:
+        st = dict(base, **{"points-per-line": n, "contact-size": h})
+        rs = [runs.get(key(c, st)) for c in ("cone in phase", "cone out of phase")]
+        if all(rs):
+            found.append((n, h, rs))
+    if not found:
+        return
+    print("\nPoints per line at a fixed n x contact size (the node-to-spring compliance held)")
+    print(
+        "| points | contact size (mm) | k g_t mean | in phase E / A / f | out of phase E / A / f |"
+    )
+    print("|---|---|---|---|---|")
+    for n, h, (a, b) in found:
+        print(
+            f"| {n} | {h} | {_kg(a)} | {a['energy_v_mj']:.2f} / {a['amp_v_mm']:.4f} / "
+            f"{a['freq_v_hz']:.1f} | {b['energy_v_mj']:.2f} / {b['amp_v_mm']:.4f} / "
+            f"{b['freq_v_hz']:.1f} |"
+        )
