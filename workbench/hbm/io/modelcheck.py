@@ -114,7 +114,7 @@ def contact_group(section: type, table: Any, i: int) -> tuple[Any, dict[str, flo
     own = {p.name: p for p in own_params(rec.law)}
     for k, v in given.items():
         if k not in own:
-            reads = ", ".join(p.name for p in params_of(rec.law))
+            reads = "it reads " + ", ".join(p.name for p in params_of(rec.law))
             raise InputError(f"{where}.{k}", v, f"a parameter of the {rec.law} law ({reads})")
     values = {
         k: check_range(f"{where}.{k}", given.get(k, p.default), p.lo, p.hi, lo_open=p.lo_open)
