@@ -16,6 +16,7 @@ from workbench.contact import (
     get_law,
     march_samples,
 )
+from workbench.contact.march import law_param_array
 from workbench.errors import InputError
 from workbench.hbm.core.aft import aft, work_per_cycle
 from workbench.hbm.core.fourier import Fourier
@@ -113,20 +114,21 @@ def test_law_step_derivatives_against_finite_differences(law):
     lw = get_law(law)
     ns = lw.n_state
     kt, kn, mu, n0 = 1.5e5, 2e5, 0.4, 2.0
+    lp = law_param_array(law, 1)[0]  # its own parameters, at their defaults
     checked = set()
     for _ in range(200):
         u = rng.normal(size=3) * np.array([2e-5, 2e-5, 8e-6])
         s = np.concatenate([rng.uniform(-1, 1, 2) * mu * n0, rng.normal(size=2) * 2e-5])
         out = [np.zeros(3), np.zeros(ns), np.zeros((3, 3)), np.zeros((3, ns))]
         out += [np.zeros((ns, 3)), np.zeros((ns, ns))]
-        flag = lw.step(u, s, mu, kt, kt, kn, n0, True, *out)
+        flag = lw.step(u, s, mu, kt, kt, kn, n0, lp, True, *out)
         checked.add(flag)
         f0, s0, Fu, Fs, Su, Ss = out
 
         def ev(uu, ss):
             o = [np.zeros(3), np.zeros(ns)] + [np.zeros((3, 3)), np.zeros((3, ns))]
             o += [np.zeros((ns, 3)), np.zeros((ns, ns))]
-            lw.step(uu, ss, mu, kt, kt, kn, n0, False, *o)
+            lw.step(uu, ss, mu, kt, kt, kn, n0, lp, False, *o)
             return np.concatenate([o[0], o[1]])
 
         D = np.vstack([Fu, Su])

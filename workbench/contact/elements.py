@@ -21,6 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError, check_choice
+from .law_params import own_params
 from .laws import LAWS  # every law module of workbench.contact.laws
 
 
@@ -96,6 +97,17 @@ class ContactElements:
         return rows.reshape(self.n_el, 3)
 
     @property
+    def lp(self) -> np.ndarray:
+        """(n_el, n_own) the law's own parameters per element, in the order of its
+        ``PARAMS`` (the ``lp`` its ``step`` receives; a declared default where
+        ``law_params`` has no value; no columns for a law without)."""
+        own = own_params(self.law)
+        out = np.empty((self.n_el, len(own)))
+        for j, p in enumerate(own):
+            out[:, j] = self.law_params.get(p.name, p.default)
+        return out
+
+    @property
     def law_code(self) -> int:
         return LAWS.index(self.law)
 
@@ -138,6 +150,7 @@ class ContactElements:
         other: Sequence[Sequence[int]] | np.ndarray | None = None,
         frames: np.ndarray | None = None,
         law: str = "decoupled",
+        law_params: dict[str, object] | None = None,
     ) -> ContactElements:
         """Elements from DOF indices of an ``n``-DOF model.
 
@@ -148,7 +161,8 @@ class ContactElements:
         (3 x 3, rows t1, t2, n) they are the node's x, y, z DOFs and the local
         displacement is ``frames[e] @ [x, y, z]``. ``other[e]`` (same shape)
         names the platform node's DOFs (relative = damper - platform); without
-        it the element acts against the ground.
+        it the element acts against the ground. ``law_params``: the law's own
+        parameters by name (a number or one per element).
         """
         n = int(n)
         d = _dof_table("dofs", dofs, n)
@@ -182,7 +196,9 @@ class ContactElements:
                                 vals.append(sign * frames[e, a, j])
         W = sp.csr_matrix((vals, (rows, cols)), shape=(3 * n_el, n))
         W.sum_duplicates()
-        return cls(W=W, mu=mu, kt1=kt, kt2=kt if kt2 is None else kt2, kn=kn, n0=n0, law=law)
+        own = dict(law_params or {})
+        kt2 = kt if kt2 is None else kt2
+        return cls(W=W, mu=mu, kt1=kt, kt2=kt2, kn=kn, n0=n0, law=law, law_params=own)
 
     @classmethod
     def concat(cls, parts: Sequence[ContactElements]) -> ContactElements:

@@ -52,15 +52,18 @@ def aft_march(
     law: int | str,
     want_jac: bool = True,
     active: np.ndarray | None = None,
+    lp: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """March the law (name, or its index in ``LAWS``) until the loop repeats; see :func:`march`.
 
     ``u`` (n_el, nt, 3) in metres; ``E`` (nt, nh) synthesis, ``P`` (nh, nt)
     analysis (:mod:`workbench.hbm.core.fourier`). Returns ``f`` (n_el, nt, 3, N),
     ``F`` (n_el, 3, nh), ``J`` (n_el, 3, nh, 3, nh, N/m) or None, ``n_slip``,
-    ``n_sep``, ``contact`` and ``periods`` (periods marched per element).
+    ``n_sep``, ``contact`` and ``periods`` (periods marched per element). ``lp``
+    (n_el, n_own): the law's own parameters per element (default: their defaults).
     """
-    return march(u, E, P, mu, kt1, kt2, kn, n0, _law_name(law), want_jac, active=active)
+    name = _law_name(law)
+    return march(u, E, P, mu, kt1, kt2, kn, n0, name, want_jac, active=active, lp=lp)
 
 
 def march_samples(u: np.ndarray, elements) -> dict[str, np.ndarray]:
@@ -80,6 +83,7 @@ def march_samples(u: np.ndarray, elements) -> dict[str, np.ndarray]:
         elements.n0,
         elements.law,
         want_jac=False,
+        lp=elements.lp,
     )
 
 

@@ -15,13 +15,16 @@ parameter files (``[contact] <name>`` of ``geometry/contact.toml``), the
 contact parameters record (:class:`workbench.assembly.params.ContactParams`:
 ``mu``, and a law's own in ``law``), the assembly (one value per contact pair:
 ``AssembledModel.mu`` and ``AssembledModel.law``), the model's cache key and
-the report's Inputs table read them here (:func:`law_params`).
+the report's Inputs table read them here (:func:`law_params`). Per contact
+element they reach the law's ``step`` as the row ``lp`` (its own parameters in
+the order of ``PARAMS``, :func:`own_params`; ``mu`` is an argument of its own).
 """
 
 from __future__ import annotations
 
 import ast
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 
 from .laws import LAWS, REGISTRY
@@ -46,6 +49,7 @@ COMMON: tuple[LawParam, ...] = (
 )
 
 
+@cache
 def _own(module_name: str) -> tuple[LawParam, ...]:
     """The ``PARAMS`` a law module declares (read from its source)."""
     path = Path(__file__).parent / "laws" / f"{module_name}.py"
@@ -65,7 +69,13 @@ def _own(module_name: str) -> tuple[LawParam, ...]:
 
 def params_of(law: str) -> tuple[LawParam, ...]:
     """The parameters law ``law`` reads: the common ones, then its own."""
-    return (*COMMON, *_own(REGISTRY[law].module_name))
+    return (*COMMON, *own_params(law))
+
+
+def own_params(law: str) -> tuple[LawParam, ...]:
+    """Law ``law``'s own parameters, in the order of its ``PARAMS``: the columns of the
+    per-element array ``lp`` its ``step`` receives (``lp[j]``: the ``j``-th)."""
+    return _own(REGISTRY[law].module_name)
 
 
 def _all_params() -> tuple[LawParam, ...]:

@@ -24,6 +24,8 @@ import types
 
 import numpy as np
 
+from ..errors import InputError
+from .law_params import own_params
 from .laws import Law, get_law
 
 log = logging.getLogger(__name__)
@@ -58,7 +60,7 @@ step = None  # the law's step: bound per law by specialise()
 
 
 def _march_py(
-    ns, u, E, P, mu, kt1, kt2, kn, n0, active, want_jac, tol, max_periods,
+    ns, u, E, P, mu, kt1, kt2, kn, n0, lp, active, want_jac, tol, max_periods,
     f, F, J, n_slip, n_sep, contact, periods, converged,
 ):  # fmt: skip
     n_el, nt, _ = u.shape
@@ -92,6 +94,7 @@ def _march_py(
         # unsigned bounds: indices the compiler knows are not negative (no wrap-around
         # test in the inner loops, which then vectorise)
         ulo, uhi = np.uint64(lo), np.uint64(max(hi, lo))
+        lpe = lp[e]  # the element's values of the law's own parameters
         p = 0
         same = False
         while p < max_periods:
@@ -99,7 +102,7 @@ def _march_py(
             scale[:] = 0.0
             for j in range(nt):
                 flags[j] = step(
-                    u[e, j], s, mu[e], kt1[e], kt2[e], kn[e], n0[e], want_jac,
+                    u[e, j], s, mu[e], kt1[e], kt2[e], kn[e], n0[e], lpe, want_jac,
                     fj, s_new, Fu, Fs, Su, Ss,
                 )  # fmt: skip
                 f[e, j, 0] = fj[0]
@@ -183,6 +186,26 @@ def _march_py(
                             J[e, a, h, c] = Ja[h, c - lo]
 
 
+def law_param_array(law: str, n_el: int, lp: object = None) -> np.ndarray:
+    """(n_el, n_own) C-ordered floats: the ``lp`` of law ``law``'s ``step`` per element.
+
+    ``lp`` given: checked for that shape (the compiled step reads it unchecked);
+    None: every element at the declared defaults. Zero columns for a law without
+    parameters of its own.
+    """
+    own = own_params(law)
+    if lp is None:
+        return np.tile(np.array([p.default for p in own], dtype=float), (n_el, 1))
+    a = np.ascontiguousarray(lp, dtype=float)
+    if a.shape != (n_el, len(own)):
+        raise InputError(
+            "lp", f"array of shape {a.shape}",
+            f"({n_el}, {len(own)}): per element, the {law} law's own parameters "
+            f"[{', '.join(p.name for p in own)}]",
+        )  # fmt: skip
+    return a
+
+
 def march(
     u: np.ndarray,
     E: np.ndarray,
@@ -197,8 +220,12 @@ def march(
     tol: float = TOL,
     max_periods: int = MAX_PERIODS,
     active: np.ndarray | None = None,
+    lp: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """March ``law`` over periods of samples ``u`` (n_el, nt, 3) in metres until it repeats.
+
+    ``lp`` (n_el, n_own): each element's values of the law's own parameters
+    (:func:`law_param_array`; default: their declared defaults).
 
     ``E`` (nt, nh) synthesises the samples from harmonics, ``P`` (nh, nt)
     analyses them (see :mod:`workbench.hbm.core.fourier`). Returns a dict with
@@ -227,6 +254,7 @@ def march(
     periods = np.zeros(n_el, dtype=np.int64)
     converged = np.zeros(n_el, dtype=np.bool_)
     arrs = [np.ascontiguousarray(a, dtype=float) for a in (mu, kt1, kt2, kn, n0)]
+    arrs.append(law_param_array(law, n_el, lp))
     act = (
         np.ones((n_el, 3), dtype=np.bool_)
         if active is None

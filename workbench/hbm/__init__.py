@@ -11,7 +11,9 @@ element's local relative displacement ``[t1, t2, n]`` (damper minus
 platform; ``n > 0`` opens), per element ``mu``, ``kt1``, ``kt2``, ``kn``,
 ``n0`` (N, compressive positive) and the law ("decoupled" Jenkins pair, as
 in "On the efficiency of a conical under-platform damper for turbines", or
-"circular"). Single-direction elements and elements against the ground
+"circular", or any law of :mod:`workbench.contact.laws`) with its own
+parameters per element (``law_params``; its ``step`` reads them as ``lp``).
+Single-direction elements and elements against the ground
 are the same record with zero rows / no platform columns. The force on
 ``q`` is ``W^T f`` with ``f = [T1, T2, -N]``.
 

@@ -6,10 +6,13 @@ A law is a module of this package that defines
 * ``N_STATE`` (int): the size of its history state ``s`` per element;
 * ``step`` (numba ``njit``): one time sample of one element,
 
-  ``step(u, s, mu, kt1, kt2, kn, n0, want_jac, f, s_new, Fu, Fs, Su, Ss) -> flag``
+  ``step(u, s, mu, kt1, kt2, kn, n0, lp, want_jac, f, s_new, Fu, Fs, Su, Ss) -> flag``
 
   from the local relative displacement ``u = [u1, u2, un]`` (m, ``un > 0``
-  opening) at this sample and the state ``s`` after the previous one, it
+  opening) at this sample and the state ``s`` after the previous one, with
+  the element's parameters (``mu``, ``kt1``, ``kt2``, ``kn``, ``n0``, and
+  ``lp``: a float array of the law's own parameters in the order of its
+  ``PARAMS``, empty for a law without, see :mod:`workbench.contact.law_params`), it
   writes the force ``f = [T1, T2, -N]`` (N) and the new state ``s_new``,
   and when ``want_jac`` their derivatives ``Fu = df/du`` (3, 3),
   ``Fs = df/ds`` (3, N_STATE), ``Su = ds_new/du`` (N_STATE, 3),
@@ -20,7 +23,9 @@ A law is a module of this package that defines
 The generic march (:mod:`workbench.contact.march`) runs any law over
 periods of samples until the state repeats and chains the derivatives;
 the time integration calls ``step`` once per time step. Adding a law is
-adding one module here (see ``dahl.py``).
+adding one module here (see ``dahl.py``), with parameters of its own too
+(``PARAMS``: the march, the time integrations and the compiled kernels pass
+them to ``step`` as ``lp``).
 """
 
 from __future__ import annotations

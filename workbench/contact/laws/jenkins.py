@@ -19,7 +19,7 @@ N_STATE = 4
 
 
 @njit(cache=True)
-def step(u, s, mu, kt1, kt2, kn, n0, want_jac, f, s_new, Fu, Fs, Su, Ss):
+def step(u, s, mu, kt1, kt2, kn, n0, lp, want_jac, f, s_new, Fu, Fs, Su, Ss):
     N = begin(u, kn, n0, want_jac, f, s_new, Fu, Fs, Su, Ss)
     if N <= 0.0:
         return 2

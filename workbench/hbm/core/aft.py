@@ -65,6 +65,7 @@ def aft(
         elements.law,
         want_jac,
         elements.active,
+        elements.lp,
     )
     F = np.ascontiguousarray(out["F"].transpose(2, 0, 1))
     return AftResult(

@@ -126,6 +126,7 @@ class SmallCorrector(Corrector):
         )
         self._maps = (c(Sz, dtype=float), c(Bz, dtype=float), c(V, dtype=float))
         self._el = tuple(c(a, dtype=float) for a in (el.mu, el.kt1, el.kt2, el.kn, el.n0))
+        self._el += (c(el.lp, dtype=float),)  # the law's own parameters per element
         self._el += (c(hb.kc, dtype=float), c(hb.anchor, dtype=float))
         self._el += (c(el.active, dtype=np.bool_),)
         self._march = (bool(f.has_dc), int(get_law(el.law).n_state), float(TOL), int(MAX_PERIODS))

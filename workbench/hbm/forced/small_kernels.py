@@ -68,7 +68,7 @@ def combine(kind, dr, di, T):
     return Y
 
 
-def evaluate(x, w, kind, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc, anchor, act, has_dc,
+def evaluate(x, w, kind, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp, kc, anchor, act, has_dc,
              ns, mtol, mper, ws):  # fmt: skip
     """The state at unknowns x (N,) and w (rad/s) into the workspace tuple ``ws``.
 
@@ -89,7 +89,7 @@ def evaluate(x, w, kind, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc, anchor, 
                 for h in range(nh):
                     acc += E[j, h] * U[h, 3 * e + a]
                 ut[e, j, a] = acc
-    march(ns, ut, E, P, mu, kt1, kt2, kn, n0, act, True, mtol, mper,
+    march(ns, ut, E, P, mu, kt1, kt2, kn, n0, lp, act, True, mtol, mper,
           f, F, J, n_slip, n_sep, contact, periods, conv)  # fmt: skip
     for e in range(n_el):
         for a in range(3):
@@ -116,10 +116,10 @@ def evaluate(x, w, kind, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc, anchor, 
     return T
 
 
-def residual(x, w, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc, anchor, act,
-             has_dc, ns, mtol, mper, ws):  # fmt: skip
+def residual(x, w, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp, kc, anchor,
+             act, has_dc, ns, mtol, mper, ws):  # fmt: skip
     """r (N,) at (x, w): ``X - S H (P - W^T G)``; the evaluation stays in ``ws``."""
-    T = evaluate(x, w, kind, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc, anchor, act, has_dc,
+    T = evaluate(x, w, kind, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp, kc, anchor, act, has_dc,
                  ns, mtol, mper, ws)  # fmt: skip
     dr, di = coef(hk, kind, wn2, zw, w, False)
     Yz = ws[12]
@@ -200,14 +200,14 @@ def _con_row(kc_, ys, wsc, cx, cw, mx, mw, xc, wc, ds):
     return cx.copy(), cw
 
 
-def _func(y, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc,
+def _func(y, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp, kc,
           anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref, cx, cw, c0, mx, mw, xc, wc,
           ds):  # fmt: skip
     """The SNES function: scaled residual (and the constraint row), inf where not finite."""
     N = Sz.shape[0] * P.shape[0]
     wsc = y[N] if kcon > 0 else wfix
     r = residual(y[:N] * u_ref, wsc * w_ref, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1,
-                 kt2, kn, n0, kc, anchor, act, has_dc, ns, mtol, mper, ws)  # fmt: skip
+                 kt2, kn, n0, lp, kc, anchor, act, has_dc, ns, mtol, mper, ws)  # fmt: skip
     out = np.empty(y.size)
     out[:N] = r / u_ref
     if kcon > 0:
@@ -221,7 +221,7 @@ def _func(y, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, k
     return out
 
 
-def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc,
+def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp, kc,
           anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref, cx, cw, c0, mx, mw, xc, wc, ds,
           tol, tol_stall, stag, max_newton, ls_max, lsn, y_out, info):  # fmt: skip
     """Newton with the bt line search and the convergence test of the SNES corrector.
@@ -240,7 +240,7 @@ def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, 
     hist = np.zeros(max_newton + 4)
     Y = np.zeros(n)
     nfun = 0
-    F = _func(X, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc,
+    F = _func(X, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp, kc,
               anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref, cx, cw, c0, mx, mw, xc, wc,
               ds)  # fmt: skip
     nfun += 1
@@ -293,7 +293,7 @@ def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, 
             break
         # -- the Newton direction at X ------------------------------------------------
         if not np.array_equal(at, X):
-            _func(X, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0,
+            _func(X, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp,
                   kc, anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref, cx, cw, c0, mx, mw, xc,
                   wc, ds)  # fmt: skip
             nfun += 1
@@ -361,7 +361,7 @@ def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, 
             while True:
                 W = X - lam * Y
                 Gv = _func(W, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2,
-                           kn, n0, kc, anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref,
+                           kn, n0, lp, kc, anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref,
                            cx, cw, c0, mx, mw, xc, wc, ds)  # fmt: skip
                 nfun += 1
                 at[:] = W
@@ -388,7 +388,7 @@ def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, 
                 lam = 0.1 * lam if lt <= 0.1 * lam else lt
                 W = X - lam * Y
                 Gv = _func(W, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2,
-                           kn, n0, kc, anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref,
+                           kn, n0, lp, kc, anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref,
                            cx, cw, c0, mx, mw, xc, wc, ds)  # fmt: skip
                 nfun += 1
                 at[:] = W
@@ -423,8 +423,8 @@ def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, 
                         lam = 0.1 * lam if lt <= 0.1 * lam else lt
                         W = X - lam * Y
                         Gv = _func(W, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu,
-                                   kt1, kt2, kn, n0, kc, anchor, act, has_dc, ns, mtol, mper, ws,
-                                   u_ref, w_ref, cx, cw, c0, mx, mw, xc, wc, ds)  # fmt: skip
+                                   kt1, kt2, kn, n0, lp, kc, anchor, act, has_dc, ns, mtol, mper,
+                                   ws, u_ref, w_ref, cx, cw, c0, mx, mw, xc, wc, ds)  # fmt: skip
                         nfun += 1
                         at[:] = W
                         gn = _norm(Gv)
@@ -447,7 +447,7 @@ def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, 
             break
     y_out[:] = X
     if own and not np.array_equal(at, X):  # the workspace holds the evaluation at a solution
-        _func(X, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc,
+        _func(X, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp, kc,
               anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref, cx, cw, c0, mx, mw, xc, wc,
               ds)  # fmt: skip
         nfun += 1
@@ -459,33 +459,35 @@ def solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, 
     return reason
 
 
-def solve_flat(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0,
+def solve_flat(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp,
                kc, anchor, act, has_dc, ns, mtol, mper, U, G, D, ut, f, F, J, n_slip, n_sep,
                contact, periods, conv, Yz, r, T, u_ref, w_ref, cx, cw, c0, mx, mw, xc, wc, ds,
                tol, tol_stall, stag, max_newton, ls_max, lsn, y_out, info):  # fmt: skip
     """:func:`solve` with the workspace as separate arrays (one fixed signature)."""
     ws = (U, G, D, ut, f, F, J, n_slip, n_sep, contact, periods, conv, Yz, r, T)
-    return solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0,
+    return solve(y0, kcon, wfix, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp,
                  kc, anchor, act, has_dc, ns, mtol, mper, ws, u_ref, w_ref, cx, cw, c0, mx, mw,
                  xc, wc, ds, tol, tol_stall, stag, max_newton, ls_max, lsn, y_out,
                  info)  # fmt: skip
 
 
-def evaluate_flat(x, w, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc,
+def evaluate_flat(x, w, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp, kc,
                   anchor, act, has_dc, ns, mtol, mper, U, G, D, ut, f, F, J, n_slip, n_sep,
                   contact, periods, conv, Yz, r, T):  # fmt: skip
     """:func:`residual` at unknowns ``x`` (m) and ``w`` (rad/s) into the separate workspace."""
     ws = (U, G, D, ut, f, F, J, n_slip, n_sep, contact, periods, conv, Yz, r, T)
-    residual(x, w, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, kc, anchor,
+    residual(x, w, hk, kind, wn2, zw, E, P, Pz, Sz, Bz, V, mu, kt1, kt2, kn, n0, lp, kc, anchor,
              act, has_dc, ns, mtol, mper, ws)  # fmt: skip
     return 0
 
 
-# the signatures of solve_flat and evaluate_flat (numba types), for the ahead-of-time build
+# the signatures of solve_flat and evaluate_flat (numba types), for the ahead-of-time build;
+# lp, the law's own parameters per element, is the 2-D array after n0 (zero columns when none)
 SIGNATURE = (
     "i8(f8[::1], i8, f8, f8[::1], i8[::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], "
     "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1], "
-    "f8[::1], f8[:, ::1], f8[:, ::1], b1[:, ::1], b1, i8, f8, i8, f8[:, ::1], f8[:, ::1], "
+    "f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[:, ::1], b1, i8, f8, i8, f8[:, ::1], "
+    "f8[:, ::1], "
     "f8[:, :, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], "
     "i8[::1], i8[::1], b1[:, ::1], i8[::1], b1[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8, f8, "
     "f8[::1], f8, f8, f8[::1], f8, f8[::1], f8, f8, f8, f8, i8, i8, i8, f8[::1], f8[::1], "
@@ -494,7 +496,8 @@ SIGNATURE = (
 EVAL_SIGNATURE = (
     "i8(f8[::1], f8, f8[::1], i8[::1], f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], "
     "f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], f8[::1], f8[::1], "
-    "f8[::1], f8[:, ::1], f8[:, ::1], b1[:, ::1], b1, i8, f8, i8, f8[:, ::1], f8[:, ::1], "
+    "f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], b1[:, ::1], b1, i8, f8, i8, f8[:, ::1], "
+    "f8[:, ::1], "
     "f8[:, :, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], "
     "i8[::1], i8[::1], b1[:, ::1], i8[::1], b1[::1], f8[:, ::1], f8[::1], f8[:, ::1])"
 )

@@ -11,6 +11,7 @@ checks here run on what it read, each refusing with an
   t2, n distinct, its platform node another node than its damper node,
   its frame orthonormal, its stiffness not beyond what the model's own
   stiffness can carry in double precision;
+- a contact law's own parameters in a ``[[contact]]`` table (:func:`contact_group`);
 - the excitation levels against the contacts' slip forces (:func:`check_levels`);
 - the stiffness (:func:`check_stiffness`): no negative stiffness, and a
   stuck system that is regular and not ill-conditioned, with the input
@@ -26,7 +27,9 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from ...errors import InputError, check_int
+from ...config import load_record
+from ...contact.law_params import COMMON, law_params, own_params, params_of
+from ...errors import InputError, check_int, check_range
 from ...limits import (
     CONTACT_STIFFNESS_RATIO_MAX,
     CONTACT_STIFFNESS_WHY,
@@ -89,6 +92,35 @@ def frames(key: str, value: Any) -> np.ndarray:
         raise InputError(
             key, value, "per element a 3 x 3 table of numbers (rows t1, t2, n)"
         ) from None
+
+
+# every contact law's own parameters (beyond mu): the keys a [[contact]] table may add
+LAW_KEYS = {p.name: p for p in law_params() if p not in COMMON}
+
+
+def contact_group(section: type, table: Any, i: int) -> tuple[Any, dict[str, float]]:
+    """A ``[[contact]]`` table as (its ``section`` record, its law's own parameters).
+
+    The keys named after a law's own parameter are the law's, not the record's: the
+    table's law reads its own (a declared default where not given, range-checked), a
+    parameter of another law is refused.
+    """
+    where = f"contact[{i}]"
+    given, rest = {}, table
+    if isinstance(table, dict):
+        given = {k: v for k, v in table.items() if k in LAW_KEYS}
+        rest = {k: v for k, v in table.items() if k not in LAW_KEYS}
+    rec = load_record(section, rest, f"{where}.")
+    own = {p.name: p for p in own_params(rec.law)}
+    for k, v in given.items():
+        if k not in own:
+            reads = "it reads " + ", ".join(p.name for p in params_of(rec.law))
+            raise InputError(f"{where}.{k}", v, f"a parameter of the {rec.law} law ({reads})")
+    values = {
+        k: check_range(f"{where}.{k}", given.get(k, p.default), p.lo, p.hi, lo_open=p.lo_open)
+        for k, p in own.items()
+    }
+    return rec, values
 
 
 def _dense(A: Any) -> np.ndarray:

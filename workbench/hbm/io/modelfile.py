@@ -39,6 +39,7 @@ A model file (every key is checked; unknown keys are refused with a hint)::
     kt_n_per_m = 1.0e5
     kn_n_per_m = 2.0e5
     n0_n = 5.0
+    law = "decoupled"           # and the law's own parameters (its PARAMS) if it has any
 
     [solver]                    # any field of workbench.hbm.SolverOptions
     ds_max = 0.2
@@ -398,7 +399,8 @@ def _sections(data: dict[str, Any], complete: bool = True) -> tuple[dict, list]:
         groups = [groups]
     if not isinstance(groups, list):
         raise InputError("contact", groups, "tables [[contact]]")
-    contact = [load_record(ContactSection, g, f"contact[{i}].") for i, g in enumerate(groups)]
+    # (record, the law's own parameters) per table
+    contact = [modelcheck.contact_group(ContactSection, g, i) for i, g in enumerate(groups)]
     e: ExcitationSection = sec["excitation"]
     _float_list("excitation.amplitudes_n", e.amplitudes_n, -ENTRY_MAX, hi=ENTRY_MAX)
     _float_list("excitation.phases_deg", e.phases_deg, -360.0, hi=360.0)
@@ -484,7 +486,7 @@ def _build(path: Path, data: dict[str, Any]) -> FrfModel:
     n = M.shape[0]
 
     parts, groups = [], []
-    for i, g in enumerate(contact):
+    for i, (g, own) in enumerate(contact):
         where = f"contact[{i}]"
         if g.nodes:
             g = _contact_by_node(g, labels, where)
@@ -515,6 +517,7 @@ def _build(path: Path, data: dict[str, Any]) -> FrfModel:
                 kn=g.kn_n_per_m,
                 n0=g.n0_n,
                 law=g.law,
+                law_params=own,
             )
         except InputError as e:  # name the group: "dofs[1]" -> "contact[0].dofs[1]"
             raise InputError(f"{where}.{e.param}", e.value, e.allowed, e.why) from None

@@ -64,7 +64,7 @@ step = None  # the law's step: bound per law by contact.march.specialise
 
 
 def _runup_py(
-    ns, Kinv, A, G, Wd, C, M, mu, kt1, kt2, kn, n0, fs, fc, fsn, omega, spp, p0, n_periods,
+    ns, Kinv, A, G, Wd, C, M, mu, kt1, kt2, kn, n0, lp, fs, fc, fsn, omega, spp, p0, n_periods,
     ramp, O, q, v, a, state, ybuf, nbuf, slip, sep,
 ):  # fmt: skip
     n_el = Wd.shape[0] // 3
@@ -99,7 +99,7 @@ def _runup_py(
             for _ in range(60):
                 uu = u.reshape(n_el, 3)
                 for e in range(n_el):
-                    step(uu[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], True,
+                    step(uu[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], lp[e], True,
                          f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
                 res = u - ul + G @ f.ravel()
                 J[:, :] = 0.0
@@ -120,8 +120,8 @@ def _runup_py(
                 return p
             uu = u.reshape(n_el, 3)
             for e in range(n_el):
-                flags[e] = step(uu[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], False,
-                                f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
+                flags[e] = step(uu[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], lp[e],
+                                False, f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
                 if flags[e] == 1:
                     slip[p] += 1
                 elif flags[e] == 2:
@@ -183,6 +183,7 @@ def runup(
     fs = system.total_static_force()
     O = observation(system, outputs)
     arrs = [np.ascontiguousarray(x, dtype=float) for x in (el.mu, el.kt1, el.kt2, el.kn, el.n0)]
+    arrs.append(el.lp)  # the law's own parameters per element
     if start is None:
         q, v = np.zeros(n), np.zeros(n)
         state = np.zeros((n_el, law.n_state))

@@ -62,6 +62,7 @@ def _newmark_py(
     kt2,
     kn,
     n0,
+    lp,
     fs,
     fc,
     fsn,
@@ -94,7 +95,7 @@ def _newmark_py(
     flags = np.zeros(n_el, dtype=np.int64)
     u = (Wd @ q).reshape(n_el, 3)
     for e in range(n_el):
-        step(u[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], False,
+        step(u[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], lp[e], False,
              f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
     state[:, :] = s_new
     fcont = Wd.T @ f.ravel()
@@ -130,8 +131,8 @@ def _newmark_py(
             for _ in range(60):
                 u = (Wd @ qn).reshape(n_el, 3)
                 for e in range(n_el):
-                    flags[e] = step(u[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], True,
-                                    f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
+                    flags[e] = step(u[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e],
+                                    lp[e], True, f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
                 r = Khat @ qn + Wd.T @ f.ravel() - rhs
                 Jt = Khat.copy()
                 Kb = np.zeros((3 * n_el, 3 * n_el))
@@ -149,8 +150,8 @@ def _newmark_py(
                 return p, False, q, v, t
             u = (Wd @ qn).reshape(n_el, 3)
             for e in range(n_el):
-                flags[e] = step(u[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], False,
-                                f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
+                flags[e] = step(u[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], lp[e],
+                                False, f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
             an = (qn - q) / (beta * dt * dt) - v / (beta * dt) - (0.5 / beta - 1.0) * a
             vn = v + dt * ((1.0 - gamma) * a + gamma * an)
             for e in range(n_el):
@@ -213,11 +214,11 @@ def time_response(
     el = system.contacts
     if el is None:
         Wd = np.zeros((0, n))
-        arrs = [np.zeros(0)] * 5
+        arrs = [np.zeros(0)] * 5 + [np.zeros((0, 0))]
         law = get_law("decoupled")
     else:
         Wd = el.W.toarray()
-        arrs = [el.mu, el.kt1, el.kt2, el.kn, el.n0]
+        arrs = [el.mu, el.kt1, el.kt2, el.kn, el.n0, el.lp]
         law = get_law(el.law)
     n_el = Wd.shape[0] // 3
     qb = np.zeros((spp, n))
