@@ -37,6 +37,7 @@ BASE = {
     "modes": ["modes", "--damper", "cone"],
     "reduce": ["reduce", "--damper", "cone"],
     "analytic": ["analytic"],
+    "disk": ["disk", "--damper", "cone"],
 }
 
 
@@ -580,10 +581,11 @@ def _path_arguments() -> list[tuple[str, list[str]]]:
         out.append((f"{command} FILE", [command, f"f{FF}.toml"]))
     out.append(("report DIR", ["report", f"r{FF}"]))
     out.append(("report --screenshot", ["report", "r", "--screenshot", f"s{FF}.png"]))
-    for command in ("mesh", "modes", "reduce", "study", "screen", "nlmodes"):
+    for command in ("mesh", "modes", "reduce", "study", "screen", "nlmodes", "disk"):
         out.append((f"{command} --geometry", ["--geometry", f"g{FF}.toml"]))
-    for command in ("modes", "reduce"):
+    for command in ("modes", "reduce", "disk"):
         out.append((f"{command} --contact-file", ["--contact-file", f"c{FF}.toml"]))
+    out.append(("disk --disk-file", ["--disk-file", f"d{FF}.toml"]))
     return out
 
 

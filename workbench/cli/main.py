@@ -38,7 +38,18 @@ from ..errors import InputError, WorkbenchError
 from ..io import rescue_folder, to_jsonable, unwritable, utf8_name
 from .values import check_values
 
-COMMANDS = ["analytic", "mesh", "modes", "reduce", "screen", "frf", "nlmodes", "study", "report"]
+COMMANDS = [
+    "analytic",
+    "mesh",
+    "modes",
+    "reduce",
+    "screen",
+    "frf",
+    "nlmodes",
+    "study",
+    "report",
+    "disk",
+]
 
 log = logging.getLogger("workbench.cli")
 

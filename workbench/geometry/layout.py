@@ -431,6 +431,8 @@ def make_layout(gp: GeometryParams) -> Layout:
         z_ridge_mm=g["z_ridge"],
         tip_gap_mm=2 * (g["half_gap"] - gp.rig.platform.overhang_mm),
         contact_spacing_mm=spacing,
+        damper_x_extent_mm=float(seat["x_extent"]),
+        damper_z_min_mm=float(seat["z_min"]),
     )
     return Layout(
         params=gp,

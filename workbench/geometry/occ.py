@@ -136,7 +136,7 @@ def embed_points(gmsh, pts: np.ndarray, surface: int) -> list[int]:
     return tags
 
 
-def _size_field(gmsh, point_tags: list[int], h_min: float, h_max: float, dist: float) -> None:
+def size_field(gmsh, point_tags: list[int], h_min: float, h_max: float, dist: float) -> None:
     """Size ``h_min`` within ``h_min`` of the points, growing linearly to ``h_max`` at ``dist``."""
     f = gmsh.model.mesh.field
     fd = f.add("Distance")
@@ -164,7 +164,7 @@ def _groups(gmsh, body: str, members: dict[str, list[int]]) -> None:
                 gmsh.model.setPhysicalName(dim, tag, name)
 
 
-def _mesh_and_write(gmsh, path: Path, what: str) -> None:
+def mesh_and_write(gmsh, path: Path, what: str) -> None:
     """Generate the 3-D mesh, raise it to order 2 and write it (metres) atomically."""
     try:
         gmsh.model.mesh.generate(3)
@@ -246,8 +246,8 @@ def build_rig(gmsh: Any, lay: Layout, path: Path) -> None:
     _groups(gmsh, "rig", members)
     ms = lay.params.rig.mesh
     h_c = min(ms.contact_size_mm, lay.contact_spacing, ms.size_mm)
-    _size_field(gmsh, point_tags, h_c, ms.size_mm, ms.refine_distance_mm)
-    _mesh_and_write(gmsh, path, "rig")
+    size_field(gmsh, point_tags, h_c, ms.size_mm, ms.refine_distance_mm)
+    mesh_and_write(gmsh, path, "rig")
 
 
 def _rotate_seam_down(gmsh, vol: int, origin: np.ndarray, axis: np.ndarray) -> None:
@@ -315,5 +315,5 @@ def build_damper(gmsh: Any, lay: Layout, path: Path) -> None:
     ms = lay.params.rig.mesh
     h = min(ms.damper_size_mm, ms.size_mm)
     h_c = min(ms.contact_size_mm, lay.contact_spacing, h)
-    _size_field(gmsh, point_tags, h_c, h, ms.refine_distance_mm)
-    _mesh_and_write(gmsh, path, f"damper ({pl['kind']})")
+    size_field(gmsh, point_tags, h_c, h, ms.refine_distance_mm)
+    mesh_and_write(gmsh, path, f"damper ({pl['kind']})")
