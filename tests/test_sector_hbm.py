@@ -193,3 +193,52 @@ def test_sector_harmonic_balance_equals_the_whole_disk(disk, eo):
     e_full = bf.friction_energy[j].sum()  # J per cycle, all six dampers
     assert abs(6 * e_s - e_full) <= 1e-6 * max(abs(e_full), 1e-6 * bf.work_ext[j])
     print(f"EO {eo}: {ps:.6e} m at {fs:.6f} Hz, rel {ps / pf - 1:.1e}; sector {t_sector:.1f} s")
+
+
+def _coarse_geometry(tmp: Path) -> Path:
+    import tomllib
+
+    data = tomllib.loads(PAPER.read_text())
+    data["rig"]["mesh"] = COARSE["rig"]["mesh"]
+    data["cylinder"].update(COARSE["cylinder"])
+    lines = []
+    for table, body in data.items():
+        for sub, vals in body.items():
+            if isinstance(vals, dict):
+                lines.append(f"[{table}.{sub}]")
+                lines += [f"{k} = {v!r}" for k, v in vals.items()]
+        flat = {k: v for k, v in body.items() if not isinstance(v, dict)}
+        if flat:
+            lines.append(f"[{table}]")
+            lines += [f"{k} = {v!r}" for k, v in flat.items()]
+    geo = tmp / "coarse.toml"
+    geo.write_text("\n".join(lines) + "\n")
+    return geo
+
+
+def test_upd_disk_frf_writes_the_receptance_and_the_branch(tmp_path, upd):
+    """`upd disk --frf --eo 5` on 6 blades: EO 5 is ND 1 travelling backward (said in the
+    summary and the HDF5), the branch file carries units, the PNG is drawn; a negative EO is
+    a one-line error naming --eo."""
+    import h5py
+    from conftest import assert_nonblank
+
+    geo = _coarse_geometry(tmp_path)
+    out = tmp_path / "out"
+    r = upd("disk", "--geometry", str(geo), "--damper", "cylinder", "--n-blades", "6",
+            "--families", "1", "--frf", "--eo", "5", "--force", "30", "--frf-modes", "6",
+            "--out", str(out), "--json")  # fmt: skip
+    assert r.code == 0, r.err
+    s = r.json["sector"]
+    assert s["nd_of_harmonic"]["1"] == 1 and s["direction_of_harmonic"]["1"] == "backward"
+    assert s["nd_of_harmonic"]["2"] == 2 and s["direction_of_harmonic"]["2"] == "backward"
+    assert s["completed"] and 0.95 < s["peak_hz"] / s["stuck_hz"][0] < 1.01
+    assert s["stability"].startswith("not computed")
+    with h5py.File(s["files"]["sector_h5"]) as h:
+        assert h["freq_hz"].attrs["unit"] == "Hz" and h["out_amp"].attrs["unit"] == "m"
+        assert h["friction_energy"].attrs["unit"] == "J"
+        assert '"direction_of_harmonic"' in h.attrs["problem"]
+    assert_nonblank(Path(s["files"]["sector_png"]))
+    r = upd("disk", "--geometry", str(geo), "--n-blades", "6", "--frf", "--eo", "-1",
+            "--out", str(tmp_path / "bad"))  # fmt: skip
+    assert r.code == 2 and r.err.strip().count("\n") == 0 and "--eo" in r.err

@@ -316,10 +316,17 @@ def sector_forced_response(
         "n_blades": model.n_blades,
         "eo": eo,
         "nd_of_harmonic": {str(h): hb.nd_of_harmonic[h] for h in fourier.harmonics},
-        "direction_of_harmonic": {
-            str(h): "forward" if hb.direction[h] > 0 else "backward" for h in fourier.harmonics
-        },
+        "direction_of_harmonic": {str(h): _direction(hb, h) for h in fourier.harmonics},
         "stuck_hz": hb.stuck_frequencies(1, 3).tolist(),
         "stability": "not computed (one sector's Hill matrix only sees its own travelling wave)",
     }
     return br, info
+
+
+def _direction(hb, h: int) -> str:
+    """How harmonic ``h``'s wave travels: "standing" at ND 0 and N/2 (a real field), else
+    "forward" (``k_h = h EO mod N <= N/2``) or "backward" (its ND is ``N - k_h``)."""
+    k = hb.nd_of_harmonic[h]
+    if k == 0 or 2 * k == hb.model.n_blades:
+        return "standing"
+    return "forward" if hb.direction[h] > 0 else "backward"
