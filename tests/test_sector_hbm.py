@@ -242,3 +242,46 @@ def test_upd_disk_frf_writes_the_receptance_and_the_branch(tmp_path, upd):
     r = upd("disk", "--geometry", str(geo), "--n-blades", "6", "--frf", "--eo", "-1",
             "--out", str(tmp_path / "bad"))  # fmt: skip
     assert r.code == 2 and r.err.strip().count("\n") == 0 and "--eo" in r.err
+
+
+def test_the_ends_of_the_eo_range_behave_like_the_rigs_two_families(tmp_path):
+    """On the paper-like rig's blade (6 blades, coarse): at EO 0 (the rig's in-phase family)
+    the cylinder rolls (stuck at the peak, its stuck frequency within 1 % of the bladed disk
+    without damper) while the cone stiffens the blades by more than 15 %; at EO N/2 (out of
+    phase) the three dampers are alike: stuck frequencies within 4 % and 30 N peaks within
+    20 % of each other (the rig: 409-412 Hz, 0.30-0.37 mm; docs/FINDINGS.md). About 15 s."""
+    from workbench.fe.cyclic import assemble_sector, nd_modes
+    from workbench.geometry.disk_build import build_disk_sector
+    from workbench.hbm.core.fourier import Fourier
+    from workbench.hbm.core.sector import SectorBalance
+    from workbench.pipeline.sector import build_sector_model, sector_forced_response
+
+    mesh = COARSE["rig"]
+    points = {
+        "cone": {"n_contact_points": 3},
+        "cylinder": {"n_contact_points": 3},
+        "wedge": {"n_contact_rows": 2, "n_contact_per_row": 3},
+    }
+    f = Fourier((0, 1), 8)
+    stuck, peaks = {}, {}
+    bare_hz = None
+    for d, pts in points.items():
+        rec = build_disk_sector(
+            d, tmp_path / d, geometry_file=PAPER, n_blades=6, overrides={"rig": mesh, d: pts}
+        )
+        if bare_hz is None:
+            bare_hz = nd_modes(assemble_sector(rec, with_damper=False), 0, 1)[0][0]
+        model = build_sector_model(rec, _contact(), [0, 3], n_modes=6, n_damper_modes=4)
+        stuck[d] = [SectorBalance(model, eo, f).stuck_frequencies(1, 1)[0] for eo in (0, 3)]
+        br, _ = sector_forced_response(model, 3, FORCE, None, HARMONICS, NT, _options())
+        assert br.completed, (d, br.message)
+        peaks[d] = br.out_amp[:, 0].max()
+        if d == "cylinder":
+            b0, _ = sector_forced_response(model, 0, FORCE, None, HARMONICS, NT, _options())
+            assert b0.completed and b0.status.max() == 0  # it rolls: never slips
+    assert abs(stuck["cylinder"][0] / bare_hz - 1) < 0.01
+    assert stuck["cone"][0] > 1.15 * bare_hz
+    f3 = np.array([s[1] for s in stuck.values()])
+    assert f3.max() / f3.min() < 1.04, stuck
+    p3 = np.array(list(peaks.values()))
+    assert p3.max() / p3.min() < 1.2, peaks
