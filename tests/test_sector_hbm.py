@@ -285,3 +285,19 @@ def test_the_ends_of_the_eo_range_behave_like_the_rigs_two_families(tmp_path):
     assert f3.max() / f3.min() < 1.04, stuck
     p3 = np.array(list(peaks.values()))
     assert p3.max() / p3.min() < 1.2, peaks
+
+
+def test_api_sector_frf(tmp_path):
+    """wb.sector_frf: EO 7 of 6 blades is ND 1 forward; a negative EO is refused before
+    any meshing, naming eo."""
+    import workbench as wb
+
+    with pytest.raises(InputError) as e:
+        wb.sector_frf("cylinder", -1, 30.0, n_blades=6, out=tmp_path / "bad")
+    assert e.value.param == "eo" and not (tmp_path / "bad").exists()
+    br, info = wb.sector_frf(
+        "cylinder", 7, FORCE, n_blades=6, geometry_file=PAPER, out=tmp_path / "d",
+        modes=6, band_hz=(455.0, 470.0), overrides=COARSE,
+    )  # fmt: skip
+    assert info["nd_of_harmonic"]["1"] == 1 and info["direction_of_harmonic"]["1"] == "forward"
+    assert br.completed and br.freq_hz[0] == 455.0 and br.out_amp.shape[1] == 1
