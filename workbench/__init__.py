@@ -42,6 +42,7 @@ __all__ = [
     "frf_curves",
     "frf_figure",
     "read_matrices",
+    "sector_frf",
 ]
 
 # The Python API (workbench/api.py, docs/API.md), loaded on first use so that
@@ -60,6 +61,7 @@ _API = (
     "frf_curves",
     "frf_figure",
     "read_matrices",
+    "sector_frf",
 )
 
 

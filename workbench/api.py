@@ -272,3 +272,46 @@ __all__ = [
     "frf_figure",
     "read_matrices",
 ]
+
+
+def sector_frf(
+    damper: str = "cone",
+    eo: int = 1,
+    force_n: float = 10.0,
+    *,
+    n_blades: int | None = None,
+    geometry_file: str | Path | None = None,
+    out: str | Path = "results/disk",
+    modes: int = 10,
+    band_hz: tuple[float, float] | None = None,
+    harmonics: tuple[int, ...] = (0, 1, 2, 3),
+    overrides: dict[str, Any] | None = None,
+):
+    """One bladed-disk sector's forced response under engine order ``eo`` (docs/DISK_HBM.md).
+
+    Builds (or reads from ``out``) the sector of ``geometry_file``'s section with
+    ``damper`` for ``n_blades`` blades (default ``geometry/disk.toml``), reduces it per
+    nodal diameter (``modes`` fixed-interface modes) and follows the response to a
+    harmonic-1 force ``force_n`` (N) on every blade, sector ``j`` lagging ``j 2 pi eo /
+    N``. Returns ``(branch, info)``: a :class:`workbench.hbm.forced.branch.Branch`
+    (output 0: the response point along the excitation direction, m) and a dict with
+    the ND and direction (forward/backward/standing) of each harmonic and the stuck
+    frequencies. An ``eo`` above N/2 maps onto its ND.
+    """
+    from .assembly.params import load_contact_params
+    from .geometry.disk_build import build_disk_sector
+    from .hbm.core.sector import check_engine_order
+    from .pipeline.sector import build_sector_model, nds_for, sector_forced_response
+
+    check_engine_order(eo, n_blades if isinstance(n_blades, int) and n_blades >= 2 else 2)
+    rec = build_disk_sector(
+        damper,
+        Path(out),
+        geometry_file=None if geometry_file is None else Path(geometry_file),
+        n_blades=n_blades,
+        overrides=overrides,
+    )
+    eo = check_engine_order(eo, rec.n_blades)
+    cp = load_contact_params(geometry_file=geometry_file)
+    model = build_sector_model(rec, cp, nds_for(eo, rec.n_blades, harmonics), n_modes=modes)
+    return sector_forced_response(model, eo, force_n, band_hz, harmonics)

@@ -63,6 +63,43 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         default=0,
     )
+    parser.add_argument(
+        "--frf",
+        action="store_true",
+        help="also the forced response of one sector under engine order --eo at --force "
+        "(harmonic balance on the sector; sector_eo<EO>.png/.h5/.csv, docs/DISK_HBM.md)",
+    )
+    add_value(
+        parser,
+        "--eo",
+        Value("int", 0, None),
+        "engine order of the excitation (above N/2 it maps onto ND N - EO mod N, backward)",
+        metavar="EO",
+        default=1,
+    )
+    add_value(
+        parser,
+        "--force",
+        Value("float", 0.0, None, lo_open=True, unit="N"),
+        "harmonic-1 force on each blade's excitation point",
+        metavar="N",
+        default=10.0,
+    )
+    add_value(
+        parser,
+        "--frf-modes",
+        Value("int", 1, 500),
+        "fixed-interface modes per ND of the sector harmonic balance",
+        metavar="N",
+        default=10,
+    )
+    add_value(
+        parser,
+        "--band-hz",
+        Value("floats", 0.0, None, lo_open=True, unit="Hz", count=2, rising=True),
+        "frequency band of the forced response, LO,HI (default 0.9..1.1 x the stuck frequency)",
+        metavar="LO,HI",
+    )
 
 
 def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
@@ -118,6 +155,10 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         "fan_hz_stuck": result["stuck"].round(3).tolist(),
         "fan_hz_free": result["free"].round(3).tolist(),
     }
+    if args.frf and comm.rank == 0:
+        from .disk_frf import sector_frf
+
+        summary["sector"] = sector_frf(args, ctx, rec, cp, out)
     if comm.rank == 0:
 
         def write(folder):

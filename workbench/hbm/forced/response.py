@@ -287,14 +287,32 @@ def frequency_response(
     if len(names) != O.shape[0]:
         raise InputError("output_names", list(names), f"{O.shape[0]} names (one per output)")
     hb = HarmonicBalance(system, f1, fourier, O, level, opts.space, opts.backend, opts.dc_anchor)
+    return follow_balance(hb, (f_lo, f_hi), opts, names, progress, label, t_start)
+
+
+def follow_balance(
+    hb,
+    band_hz: tuple[float, float],
+    opts: SolverOptions,
+    names: tuple[str, ...],
+    progress: Callable[[float, float, int], None] | None = None,
+    label: str = "",
+    t_start: float | None = None,
+) -> Branch:
+    """The forced response of a built balance problem (``hb``: a
+    :class:`..core.balance.HarmonicBalance` or another problem with its methods, e.g.
+    :class:`..core.sector.SectorBalance`) over ``band_hz`` at its level."""
+    t_start = time.perf_counter() if t_start is None else t_start
+    f_lo, f_hi = band_hz
+    level, fourier, el = hb.level, hb.fourier, hb.el
+    n_el = hb.n_el
     w0, w1 = TWO_PI * f_lo, TWO_PI * f_hi
     # scales: the stuck linear response at the band ends
     u_ref = max(
         np.abs(hb.stuck_solution(w0)).max(initial=0.0),
         np.abs(hb.stuck_solution(w1)).max(initial=0.0),
     )
-    if system.contacts is not None and system.n_el:
-        el = system.contacts
+    if el is not None and n_el:
         slip = el.mu * el.n0 / np.maximum(np.maximum(el.kt1, el.kt2), 1e-300)
         u_ref = max(u_ref, float(slip.max()) * 1e-3)
     u_ref = u_ref if u_ref > 0 else 1e-9
@@ -343,7 +361,7 @@ def frequency_response(
         log.warning("%s%s", f"{label}: " if label else "", note)
         message = f"{message or ('reached the band end' if completed else '')}; {note}"
 
-    n_out, nh, n_el = O.shape[0], fourier.nh, system.n_el
+    n_out, nh = len(names), fourier.nh
     empty = dict(
         out_amp=(0, n_out),
         out_h1=(0, n_out),
