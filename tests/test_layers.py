@@ -92,6 +92,35 @@ def test_the_scan_sees_relative_local_and_package_imports():
     assert (6, "workbench.render.common") in mods
 
 
+# the layers post/ is built on (post/ computes records from what they produce); pipeline/ is
+# not one of them yet: it imports post.results (CaseResult) and post.provenance
+BELOW_POST = ("io", "geometry", "fe", "assembly", "contact", "hbm", "reduced.py")
+
+
+def _is_post(mod: str) -> bool:
+    return mod == "workbench.post" or mod.startswith("workbench.post.")
+
+
+@pytest.mark.parametrize("layer", BELOW_POST)
+def test_layers_below_post_never_import_post(layer):
+    """post/ serves the study and report layers only: units, VTK and CSV writers and the
+    HDF5 record writer live in io/, so no module below post/ imports it (issue 30)."""
+    top = PKG / layer
+    files = [top] if top.suffix == ".py" else sorted(top.rglob("*.py"))
+    assert files and all(p.is_file() for p in files), f"workbench/{layer} is not there"
+    bad = []
+    for p in files:
+        module = ".".join(p.relative_to(PKG.parent).with_suffix("").parts)
+        if p.name == "__init__.py":
+            module += ".__init__"
+        bad += [
+            f"{p.relative_to(PKG.parent)}:{line}: {mod}"
+            for line, mod in imported_modules(p.read_text(), module)
+            if _is_post(mod)
+        ]
+    assert not bad, f"workbench/{layer} imports workbench.post:\n" + "\n".join(bad)
+
+
 MAX_LINES = 600  # a module a newcomer can hold in their head (issue 14)
 
 

@@ -18,7 +18,7 @@ meshio = pytest.importorskip("meshio")
 pv = pytest.importorskip("pyvista")
 
 from tests.synthetic import synthetic_case  # noqa: E402
-from workbench.post import vtk_out  # noqa: E402
+from workbench.io import vtk_out  # noqa: E402
 
 
 @pytest.fixture(scope="module")

@@ -103,7 +103,7 @@ class ReducedModel:
             h.attrs["code_version"] = self.code_version
             h.attrs["n_full_dofs"] = self.n_full_dofs
             h.attrs["timings"] = json.dumps(self.timings)
-            from .post.units import REDUCED_UNITS, annotate
+            from .io.units import REDUCED_UNITS, annotate
 
             annotate(h, REDUCED_UNITS)
         return path

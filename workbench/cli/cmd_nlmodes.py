@@ -279,8 +279,8 @@ def _run_model(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
 def _run_study(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
     from ..errors import InputError
     from ..io import write_json
+    from ..io.csv_rows import write_rows_csv
     from ..log import mpi_rank
-    from ..post.tables import write_rows_csv
     from ..studies.engine.nlmodes import cost_rows, nlmode_sections, study_backbones
     from ..studies.engine.spec import cli_values, load_study
 

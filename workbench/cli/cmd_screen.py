@@ -61,9 +61,9 @@ def run(args: argparse.Namespace, ctx) -> dict:
 
     from ..errors import InputError
     from ..io import write_json
+    from ..io.csv_rows import write_rows_csv
     from ..log import mpi_rank
     from ..post.screen_table import table
-    from ..post.tables import write_rows_csv
     from ..studies.engine.schedule import world_comm as _comm
     from ..studies.engine.screening import run_screen
     from ..studies.engine.spec import cli_values, load_study

@@ -44,7 +44,7 @@ def sector_frf(args, ctx, rec, cp, out: Path) -> dict[str, Any]:
     def write(folder: Path) -> dict[str, str]:
         import h5py
 
-        from ..post.units import BRANCH_UNITS, annotate
+        from ..io.units import BRANCH_UNITS, annotate
         from ..render.sector_figures import plot_sector_frf
 
         stem = folder / f"sector_eo{eo}"

@@ -227,7 +227,7 @@ def _write_xdmf(path: Path, V, arrays: list[np.ndarray], comm) -> Path:
     """Mode shapes as one XDMF time series ("time" = mode number from 1, as the pictures).
 
     dolfinx's layout, read by ParaView; meshio and pyvista read the VTU/PVD
-    files written beside (:func:`workbench.post.vtk_out.write_modes`).
+    files written beside (:func:`workbench.io.vtk_out.write_modes`).
     """
     from dolfinx.io import XDMFFile
 
@@ -245,7 +245,7 @@ def _write_vtk(
     out: Path, body_shapes, freqs, labels, contact, dmp, damper_elastic, damper_hz, comm
 ) -> dict[str, str]:
     """modes_rig.pvd and modes_damper.pvd (VTU per mode, 1-based, with frequencies)."""
-    from ..post.vtk_out import write_modes
+    from ..io.vtk_out import write_modes
 
     if contact != "stuck":  # the damper file holds its own free-free elastic modes
         bs = _gather_shapes(dmp.V, damper_elastic, comm)

@@ -276,7 +276,7 @@ def _build(lay: Layout, dig: str, out_dir: Path) -> BuiltGeometry:
 
 def _write_vtu(out_dir: Path) -> None:
     """rig.vtu and damper.vtu beside the XDMF files (meshio, pyvista and ParaView read them)."""
-    from ..post.vtk_out import write_mesh_vtu
+    from ..io.vtk_out import write_mesh_vtu
 
     for body in ("rig", "damper"):
         vtu, msh = out_dir / f"{body}.vtu", out_dir / f"{body}.msh"

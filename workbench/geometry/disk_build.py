@@ -267,7 +267,7 @@ def _build(dl: DiskLayout, params: dict, dig: str, out_dir: Path) -> DiskSector:
         digest=dig,
         stats=stats,
     )
-    from ..post.vtk_out import write_mesh_vtu
+    from ..io.vtk_out import write_mesh_vtu
 
     for msh in (sector_msh, damper_msh):
         write_mesh_vtu(msh, msh.with_suffix(".vtu"))

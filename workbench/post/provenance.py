@@ -412,7 +412,9 @@ def solver_sources() -> str:
     from ..io import code_version, digest
 
     pkg = ROOT / "workbench"
-    return digest([code_version(pkg / p) for p in ("contact", "hbm", "assembly")], 12)
+    parts = [code_version(pkg / p) for p in ("contact", "hbm", "assembly")]
+    parts.append(code_version(pkg / "io", ("record.py",)))  # the branch's HDF5 writer
+    return digest(parts, 12)
 
 
 # ---- storage: case/inputs in a case's HDF5 group -----------------------------------------

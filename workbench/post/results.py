@@ -313,7 +313,7 @@ class CaseResult:
                     from .provenance import save_inputs
 
                     save_inputs(g.create_group("inputs"), self.inputs)
-                from .units import BRANCH_UNITS, CASE_UNITS, annotate
+                from ..io.units import BRANCH_UNITS, CASE_UNITS, annotate
 
                 annotate(h, {**BRANCH_UNITS, **CASE_UNITS})
         return path

@@ -30,7 +30,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ..io.record import Layout, PathRecord
+from ...io.record import Layout, PathRecord
 
 _ARRAYS = (
     "freq_hz",

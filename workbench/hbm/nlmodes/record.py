@@ -13,8 +13,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ...io.record import Layout, PathRecord
 from ..core.fourier import Fourier
-from ..io.record import Layout, PathRecord
 
 POINT_ARRAYS = (
     "amplitude",
@@ -172,7 +172,7 @@ class NlModeBranch(PathRecord):
 
     def to_csv(self, path: str | Path, unit: str = "m") -> Path:
         """One row per point: amplitude, frequency, damping, energy, status counts, outputs."""
-        from ...post.tables import write_rows_csv
+        from ...io.csv_rows import write_rows_csv
 
         rows = []
         for i in range(self.n_points):

@@ -67,7 +67,7 @@ def field_path(out: Path, case) -> Path:
 def missing_fields(cases: list, out: Path, comm=None) -> list[int]:
     """Indices of the planned cases whose field file is absent or stale (rank 0 reads the
     files, every rank of ``comm`` gets the list)."""
-    from ...post.vtk_out import has_digest
+    from ...io.vtk_out import has_digest
 
     missing = None
     if comm is None or comm.rank == 0:
@@ -119,7 +119,7 @@ def write_study_fields(
 
 
 def _model_fields(out: Path, cases: list, prep, expand_body, comm) -> list[Path]:
-    from ...post.vtk_out import write_case_field
+    from ...io.vtk_out import write_case_field
 
     n_rig = prep.assembled.n_rig
     cols, meta = [], []

@@ -58,6 +58,7 @@ def backbone_key(case: Case, relative_range: tuple[float, float], n_steps: int, 
             "top_force": max(forces) if forces else None,
             "code": [
                 code_version(root / "hbm"),
+                code_version(root / "io", ("record.py",)),
                 code_version(root / "contact"),
                 code_version(root / "assembly"),
             ],
@@ -292,8 +293,8 @@ def cost_rows(res: dict[str, Any]) -> list[dict[str, Any]]:
 def nlmode_sections(res: dict[str, Any], out: str | Path) -> list[dict]:
     """Report sections for the backbones and the synthesis check (figures, tables, text)."""
     from ...hbm.nlmodes.record import NlModeBranch
+    from ...io.csv_rows import write_rows_csv
     from ...post.results import CaseResult
-    from ...post.tables import write_rows_csv
     from ...render.nlmode_figures import plot_backbones, plot_synthesis, plot_synthesis_errors
 
     out = Path(out)

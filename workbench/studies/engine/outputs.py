@@ -29,12 +29,12 @@ def write_outputs(
     results: StudyResults, spec: StudySpec, out: Path, prepared: dict[str, PreparedModel]
 ) -> None:
     """results.h5, CSV files, summary, figures, tables, manifest and report."""
-    from ...post.tables import write_rows_csv
+    from ...io.csv_rows import write_rows_csv
 
     results.save(out / "results.h5")
     for c in results.cases:
         c.branch.to_csv(out / "cases" / f"{c.case_id}.csv", unit_scale=1e3, unit="mm")
-    from ...post.vtk_out import write_study_peaks
+    from ...io.vtk_out import write_study_peaks
 
     write_study_peaks(results, out, prepared, {c.digest: c.model_digest for c in plan(spec)})
     rows = results.summaries()

@@ -83,6 +83,8 @@ def solver_code_version() -> str:
         if p.relative_to(hbm_dir).parts[0] != NLMODE_PACKAGE
     )
     parts.insert(1, code_version(hbm_dir, hbm))
+    # the HDF5 writer of a case's branch (it was hbm/io/record.py)
+    parts.insert(2, code_version(root / "io", ("record.py",)))
     parts.append(code_version(root / "studies" / "engine", ("plan.py", "runner.py")))
     parts.append(code_version(root / "pipeline"))
     return digest(parts, 12)

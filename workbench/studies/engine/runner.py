@@ -7,7 +7,7 @@ Folder layout of a study (``out``)::
     out/cache/cases/<digest>.h5             one finished case (atomic; the resume unit)
     out/results.h5                          every case of this study, in plan order
     out/cases/<case>.csv                    each curve as CSV
-    out/cases/<case>_peak.vtu               contact pairs at the peak (ParaView; post/vtk_out.py)
+    out/cases/<case>_peak.vtu               contact pairs at the peak (ParaView; io/vtk_out.py)
     out/summary.csv, summary.json           one row per case
     out/figures/, out/tables/               pictures and tables
     out/manifest.json, out/report.html      the report

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ....io import write_json
+from ....io.csv_rows import write_rows_csv
 from ....post.fidelity import (
     KNOBS,
     NO_LADDER,
@@ -24,7 +25,6 @@ from ....post.fidelity import (
     level_label,
     limit_uncertainty_pct,
 )
-from ....post.tables import write_rows_csv
 
 
 def write_csv(path: Path, rows: list[dict[str, Any]], cols: list[str] | None = None) -> Path:

@@ -48,7 +48,7 @@ from typing import Any
 from ....errors import InputError, SolveError
 from ....hard_cases import CASES, METHODS
 from ....io import write_json
-from ....post.tables import write_rows_csv
+from ....io.csv_rows import write_rows_csv
 from ...engine.outputs import write_manifest_and_report
 from ...engine.spec import StudySpec
 from .cells import (

@@ -419,7 +419,7 @@ def write_uncertainty_outputs(
     timings: dict[str, float],
 ) -> None:
     """Tables, HDF5, figures, ``uncertainty.json``, manifest and report."""
-    from ....post.tables import write_rows_csv
+    from ....io.csv_rows import write_rows_csv
     from ...engine.outputs import write_manifest_and_report
 
     tables = out / "tables"

@@ -95,7 +95,7 @@ def code_version(
     laws of ``contact/laws/``). A change to any of them changes the version,
     so every cache keyed on it is rebuilt.
     """
-    from . import __version__
+    from .. import __version__
 
     here = Path(package_dir)
     files = sorted(here.rglob("*.py")) if names is None else [here / n for n in names]
@@ -199,7 +199,7 @@ def folder_lock(folder: str | Path, option: str = "--out") -> Iterator[Path]:
     import socket
     import time
 
-    from .errors import InputError
+    from ..errors import InputError
 
     folder = Path(folder)
     lock = folder / LOCK_NAME

@@ -37,7 +37,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from ..io import atomic_path
+from . import atomic_path
 
 log = logging.getLogger(__name__)
 

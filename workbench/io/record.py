@@ -79,7 +79,7 @@ def write_record(path: str | Path, obj: Any, layout: Layout) -> Path:
     """Write ``obj``'s datasets and attributes by ``layout`` to ``path`` atomically."""
     import h5py
 
-    from ...io import atomic_path
+    from . import atomic_path
 
     path = Path(path)
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as h:
