@@ -103,6 +103,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
+    from ..geometry import load_geometry_params
+    from ..geometry.disk import load_disk_params, make_disk_layout
+
+    # the inputs checked before MPI starts: a bad one is one line on stderr, with nothing
+    # before it (OpenMPI's start-up may print its own warnings, e.g. where /sys is absent)
+    gp = load_geometry_params(args.damper, args.geometry, None, args.size)
+    make_disk_layout(gp, load_disk_params(args.disk_file, n_blades=args.n_blades, bore=args.bore))
+
     from mpi4py import MPI
 
     from ..assembly.params import load_contact_params
