@@ -24,6 +24,7 @@ geometry = "{geometry}"
 mesh-size = 25.0
 contact-mesh-size = 8.0
 damper-mesh-size = 10.0
+contact-points = 3
 harmonics = [0, 1, 2, 3]
 n-blades = 6
 eos = [1, 5]
@@ -63,7 +64,8 @@ def study(tmp_path_factory):
 
 def test_peaks_are_the_sector_forced_response(study):
     """Each case's peak (amplitude, frequency, friction energy) is sector_forced_response's
-    on the same sector model, exactly; EO 5 of 6 blades is ND 1 travelling backward."""
+    on the same sector model (to the 9 digits of the CSV); EO 5 of 6 blades is ND 1
+    travelling backward."""
     import csv
 
     from workbench.assembly.params import load_contact_params
@@ -84,7 +86,7 @@ def test_peaks_are_the_sector_forced_response(study):
         br, _ = sector_forced_response(model, int(r["eo"]), 30.0, None, (0, 1, 2, 3))
         i = int(br.out_amp[:, 0].argmax())
         assert float(r["peak_m"]) == pytest.approx(br.out_amp[i, 0], rel=1e-8)
-        assert float(r["peak_hz"]) == pytest.approx(br.freq_hz[i], rel=1e-10)
+        assert float(r["peak_hz"]) == pytest.approx(br.freq_hz[i], rel=1e-8)  # CSV: 9 digits
         assert float(r["friction_energy_j"]) == pytest.approx(br.friction_energy[i].sum(), rel=1e-8)
         assert float(r["friction_energy_j"]) > 0.0  # 30 N: the cylinder slips at the peak
 

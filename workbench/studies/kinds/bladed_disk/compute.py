@@ -93,7 +93,7 @@ def _sectors(spec: StudySpec, out: Path, comm) -> dict[str, Any]:
                 geometry_file=spec.geometry,
                 n_blades=int(spec.bladed_disk.n_blades),
                 size_mm=spec.mesh_size,
-                overrides={"rig": {"mesh": mesh}} if mesh else None,
+                overrides=_overrides(d, mesh, o.contact_points),
             )
 
         if comm is None:
@@ -102,6 +102,15 @@ def _sectors(spec: StudySpec, out: Path, comm) -> dict[str, Any]:
             rec = run_on_root(comm, build, "disk build")
             recs[damper] = rec if comm.rank == 0 else DiskSector.load(folder / "disk.h5")
     return recs
+
+
+def _overrides(damper: str, mesh: dict, points: int | None) -> dict | None:
+    """The geometry overrides of the study's mesh sizes and contact points for ``damper``."""
+    over: dict[str, Any] = {"rig": {"mesh": mesh}} if mesh else {}
+    if points is not None:
+        pts = {"wedge": {"n_contact_rows": 2, "n_contact_per_row": int(points)}}
+        over[damper] = pts.get(damper, {"n_contact_points": int(points)})
+    return over or None
 
 
 def case_key(rec, cp, spec: StudySpec, eo: int, force_n: float) -> str:

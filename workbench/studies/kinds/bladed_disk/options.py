@@ -59,6 +59,17 @@ class BladedDiskOptions:
         unit="mm",
         role="model",
     )
+    contact_points: int | None = option(
+        "int",
+        None,
+        "bladed-disk: contact points per line of the cone and cylinder and per full row of "
+        "the wedge (2 rows a face); None: the geometry files' (23 per line, 5 rows of 15)",
+        "bladed-disk",
+        lo=2,
+        hi=200,
+        optional=True,
+        role="model",
+    )
     sector_modes: int = option(
         "int",
         6,
