@@ -176,6 +176,9 @@ def answer(cases: list[dict], dampers: list[str], forces: list[float], eos: list
                         "direction": w["direction"],
                         "worst_peak_m": w["peak_m"],
                         "peak_hz": w["peak_hz"],
+                        "peak_at_band_edge": w.get("peak_at_band_edge", False),
+                        # EOs whose branch stopped early: their peak is a lower bound
+                        "stopped_eos": " ".join(str(c["eo"]) for c in got if not c["completed"]),
                     }
                 )
     for e in eos:
@@ -190,6 +193,7 @@ def answer(cases: list[dict], dampers: list[str], forces: list[float], eos: list
                         "direction": b["direction"],
                         "force_n": f,
                         "best_damper": b["damper"],
+                        "best_stopped_early": not b["completed"],  # its peak: a lower bound
                         **{f"{c['damper']}_peak_m": c["peak_m"] for c in got},
                     }
                 )
@@ -289,6 +293,8 @@ def run_bladed_disk(spec: StudySpec, out: str | Path, *, force: bool = False) ->
     for i, key in enumerate(keys):
         c = json.loads((cache / f"{key}.json").read_text())
         c["cached"] = i not in computed
+        amp = c["amp_m"]  # a peak on the band's first or last point is not a resonance peak
+        c["peak_at_band_edge"] = bool(amp) and int(np.argmax(amp)) in (0, len(amp) - 1)
         cases.append(c)
     worst, best = answer(cases, list(spec.dampers), forces, eos)
     summary: dict[str, Any] = {
@@ -312,6 +318,11 @@ def run_bladed_disk(spec: StudySpec, out: str | Path, *, force: bool = False) ->
             {"damper": c["damper"], "eo": c["eo"], "force_n": c["force_n"], "message": c["message"]}
             for c in cases
             if not c["completed"]
+        ],
+        "at_band_edge": [
+            {"damper": c["damper"], "eo": c["eo"], "force_n": c["force_n"], "peak_hz": c["peak_hz"]}
+            for c in cases
+            if c["peak_at_band_edge"]
         ],
     }
     if rank == 0:
@@ -345,7 +356,9 @@ def write_outputs(spec, out, cases, worst, best, fans, eos, forces, summary, tim
         "peak_hz",
         "friction_energy_j",
         "stuck_hz",
+        "peak_at_band_edge",
         "completed",
+        "cached",
         "n_points",
         "wall_s",
         "message",
@@ -434,10 +447,13 @@ def write_outputs(spec, out, cases, worst, best, fans, eos, forces, summary, tim
     head = [
         f"{w['damper']} at {w['force_n']:g} N: worst EO {w['worst_eo']} (ND {w['nd']}, "
         f"{w['direction']}), peak {w['worst_peak_m']:.4g} m at {w['peak_hz']:.1f} Hz"
+        + (f" (branch stopped early at EO {w['stopped_eos']})" if w["stopped_eos"] else "")
         for w in worst
     ]
     summary["headline"] = head
-    sections = bladed_disk_sections(n_b, eos, summary["eo_nd"], worst, best, summary["failed"])
+    sections = bladed_disk_sections(
+        n_b, eos, summary["eo_nd"], worst, best, summary["failed"], summary["at_band_edge"]
+    )
     write_manifest_and_report(
         out,
         spec,

@@ -86,7 +86,7 @@ def plot_fan_eo(fans, n_blades, worst, cases, path: str | Path | None) -> Any:
     frequency at its ND (markers), and for each damper's worst EO the engine-order line
     ``f = EO x speed`` through that crossing (the speed at which it is resonant)."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7.4, 4.8))
+    fig, ax = plt.subplots(figsize=(9.6, 4.8))
     top = 0.0
     for d, hz in fans.items():
         nd = np.arange(hz.shape[0])
@@ -100,8 +100,9 @@ def plot_fan_eo(fans, n_blades, worst, cases, path: str | Path | None) -> Any:
                 color=damper_color(d),
                 label=f"{d} stuck" if j == 0 else None,
             )
-        top = max(top, float(np.nanmax(hz)))
+        top = max(top, float(np.nanmax(hz[:, 0])))
     for c in cases:
+        top = max(top, float(c["peak_hz"]))
         ax.plot(c["nd"], c["peak_hz"], "x", color=damper_color(c["damper"]), ms=7)
     ax.plot([], [], "x", color="k", label="peak of a case (at its EO's ND)")
     done = set()
@@ -123,9 +124,9 @@ def plot_fan_eo(fans, n_blades, worst, cases, path: str | Path | None) -> Any:
     ax.set_ylabel("frequency (Hz)")
     ax.set_title(f"Fan diagram and engine-order excitation, {n_blades} blades")
     ax.set_xlim(-0.3, n_blades // 2 + 0.3)
-    ax.set_ylim(0.0, 1.15 * top)
+    ax.set_ylim(0.0, 1.3 * top)  # the first family and the peaks; higher families clipped
     ax.set_xticks(np.arange(0, n_blades // 2 + 1, max(1, (n_blades // 2) // 12)))
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower right", fontsize=7)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
     fig.tight_layout()
     return save_figure(fig, path)

@@ -14,6 +14,7 @@ def bladed_disk_sections(
     worst: list[dict],
     best: list[dict],
     failed: list[dict],
+    at_edge: list[dict],
 ) -> list[dict]:
     """The report's sections. ``eo_nd``: EO -> its ND and direction; ``worst``: per damper
     and force the worst EO and peak; ``best``: per EO and force the damper with the smallest
@@ -45,9 +46,21 @@ def bladed_disk_sections(
     if failed:
         text.append(
             "Cases that stopped before the band end (their peak is the largest amplitude "
-            "reached): "
+            "reached, a lower bound: the worst EO of that damper and force may be one of "
+            "these): "
             + "; ".join(
                 f"{c['damper']} EO {c['eo']} {c['force_n']:g} N: {c['message']}" for c in failed
+            )
+            + "."
+        )
+    if at_edge:
+        text.append(
+            "Cases whose largest amplitude is on the first or last point of their band (the "
+            "resonance lies outside 0.9..1.1 times the stuck frequency, e.g. a damper that "
+            "rolls or slides freely; their peak is a lower bound): "
+            + "; ".join(
+                f"{c['damper']} EO {c['eo']} {c['force_n']:g} N at {c['peak_hz']:.1f} Hz"
+                for c in at_edge
             )
             + "."
         )
