@@ -50,7 +50,7 @@ KIND = StudyKind(name="echo", description="writes its option back (a test kind)"
                  run=_run, options=EchoOptions, check=_check, order=90)
 '''
 
-BUILT_IN = ("comparison", "sweep", "fidelity", "robustness", "uncertainty")
+BUILT_IN = ("comparison", "sweep", "fidelity", "robustness", "uncertainty", "bladed_disk")
 
 
 def test_the_built_in_kinds_are_registered_in_order_with_their_options():

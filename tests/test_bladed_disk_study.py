@@ -1,0 +1,129 @@
+"""The bladed-disk study kind (issue 29, item 5) on a tiny disk: 6 blades, the coarse
+paper-like mesh, one damper, two engine orders (EO 1 forward and EO 5 backward, both at
+ND 1), one force. Its peaks are the sector forced response's own, its answer table is the
+argmax of its peaks, a second run reuses every case, and bad input is refused in one line
+naming the option."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from workbench.errors import InputError
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDY = """
+name = "bd_tiny"
+kind = "bladed_disk"
+dampers = ["cylinder"]
+forces = [30.0]
+geometry = "{geometry}"
+mesh-size = 25.0
+contact-mesh-size = 8.0
+damper-mesh-size = 10.0
+contact-points = 3
+harmonics = [0, 1, 2, 3]
+n-blades = 6
+eos = [1, 5]
+sector-modes = 4
+damper-modes = 3
+fan-families = 2
+"""
+
+
+def _spec(tmp: Path, **change: str):
+    from workbench.studies.engine.spec import load_study
+
+    text = STUDY.format(geometry=ROOT / "geometry" / "paper_rig.toml")
+    for k, v in change.items():
+        text = "\n".join(
+            f"{k} = {v}" if line.startswith(f"{k} =") else line for line in text.splitlines()
+        )
+    path = tmp / "study.toml"
+    path.write_text(text)
+    return load_study(path)
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    from workbench.studies.kinds import get
+
+    tmp = tmp_path_factory.mktemp("bd")
+    spec = _spec(tmp)
+    out = tmp / "out"
+    t0 = time.perf_counter()
+    first = get("bladed_disk").run(spec, out, False)
+    t1 = time.perf_counter()
+    second = get("bladed_disk").run(spec, out, False)
+    t2 = time.perf_counter()
+    return spec, out, first, second, (t1 - t0, t2 - t1)
+
+
+def test_peaks_are_the_sector_forced_response(study):
+    """Each case's peak (amplitude, frequency, friction energy) is sector_forced_response's
+    on the same sector model (to the 9 digits of the CSV); EO 5 of 6 blades is ND 1
+    travelling backward."""
+    import csv
+
+    from workbench.assembly.params import load_contact_params
+    from workbench.geometry.disk_build import DiskSector
+    from workbench.pipeline.sector import build_sector_model, sector_forced_response
+
+    spec, out, first, _, _ = study
+    assert first["eo_nd"] == {
+        "1": {"nd": 1, "direction": "forward"},
+        "5": {"nd": 1, "direction": "backward"},
+    }
+    rows = list(csv.DictReader(open(out / "tables" / "bladed_disk_cases.csv")))
+    assert [(int(r["eo"]), r["direction"]) for r in rows] == [(1, "forward"), (5, "backward")]
+    rec = DiskSector.load(out / "cache" / "disk" / "cylinder" / "disk.h5")
+    cp = load_contact_params(geometry_file=spec.geometry)
+    model = build_sector_model(rec, cp, None, n_modes=4, n_damper_modes=3)
+    for r in rows:
+        br, _ = sector_forced_response(model, int(r["eo"]), 30.0, None, (0, 1, 2, 3))
+        i = int(br.out_amp[:, 0].argmax())
+        assert float(r["peak_m"]) == pytest.approx(br.out_amp[i, 0], rel=1e-8)
+        assert float(r["peak_hz"]) == pytest.approx(br.freq_hz[i], rel=1e-8)  # CSV: 9 digits
+        assert float(r["friction_energy_j"]) == pytest.approx(br.friction_energy[i].sum(), rel=1e-8)
+        assert float(r["friction_energy_j"]) > 0.0  # 30 N: the cylinder slips at the peak
+
+
+def test_answer_is_the_argmax_and_the_results_carry_units(study):
+    import h5py
+
+    _, out, first, _, _ = study
+    with h5py.File(out / "bladed_disk.h5") as h:
+        peaks = h["peak_m"][0, 0]
+        eos = list(h["eos"][:])
+        assert h["peak_m"].attrs["unit"] == "m"
+        assert h["friction_energy_j"].attrs["unit"] == "J"
+        assert h["fan_stuck_hz/cylinder"].attrs["unit"] == "Hz"
+    (w,) = first["worst"]
+    assert w["worst_eo"] == eos[int(np.argmax(peaks))]
+    assert w["worst_peak_m"] == peaks.max()
+    assert [b["best_damper"] for b in first["best"]] == ["cylinder", "cylinder"]
+    for name in ("peaks", "energy", "fan"):
+        assert (out / "figures" / f"bladed_disk_{name}.png").stat().st_size > 10_000
+    assert (out / "report.html").is_file()
+
+
+def test_second_run_reuses_every_case(study):
+    _, _, first, second, (t_first, t_second) = study
+    assert first["n_computed"] == 2 and first["n_reused"] == 0
+    assert second["n_computed"] == 0 and second["n_reused"] == 2
+    assert second["worst"] == first["worst"]
+    assert t_second < t_first
+
+
+@pytest.mark.parametrize(
+    "change, name",
+    [({"eos": "[-1]"}, "eos"), ({"eos": "[1.5]"}, "eos"), ({"n-blades": "1"}, "n-blades")],
+)
+def test_bad_input_names_the_option(tmp_path, change, name):
+    with pytest.raises(InputError) as e:
+        _spec(tmp_path, **change)
+    assert e.value.param.startswith(name)
+    assert "\n" not in str(e.value)
