@@ -33,7 +33,7 @@ import numpy as np
 
 from ....errors import InputError
 from ....io import digest, write_json
-from ....post.tables import write_rows_csv
+from ....io.csv_rows import write_rows_csv
 from ...engine.outputs import write_manifest_and_report
 from ...engine.plan import solver_code_version
 from ...engine.schedule import run_tasks, study_comm
