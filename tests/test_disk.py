@@ -182,16 +182,13 @@ def test_upd_disk_bad_input_is_one_line(upd, tmp_path):
     assert "6 <= disk.n_blades <= 400" in r.err
 
 
-def test_upd_disk_writes_the_fan_diagram(tmp_path, upd):
-    """`upd disk` on the coarse 6-blade disk: the fan's rows are nodal diameters 0..3, the
-    stuck damper stiffens the first family at every ND but 0 (the cylinder rolls there), and
-    fan.png is drawn."""
-    from conftest import assert_nonblank
-
+def coarse_geometry_file(tmp: Path, coarse: dict | None = None) -> Path:
+    """The paper-like rig's geometry file with the coarse mesh of ``coarse`` (default
+    :data:`COARSE`), written to ``tmp/coarse.toml`` for the command line."""
+    coarse = COARSE if coarse is None else coarse
     data = tomllib.loads(PAPER.read_text())
-    data["rig"]["mesh"] = COARSE["rig"]["mesh"]
-    data["cylinder"].update(COARSE["cylinder"])
-    geo = tmp_path / "coarse.toml"
+    data["rig"]["mesh"] = coarse["rig"]["mesh"]
+    data["cylinder"].update(coarse["cylinder"])
     lines = []
     for table, body in data.items():
         for sub, vals in body.items():
@@ -202,7 +199,18 @@ def test_upd_disk_writes_the_fan_diagram(tmp_path, upd):
         if flat:
             lines.append(f"[{table}]")
             lines += [f"{k} = {v!r}" for k, v in flat.items()]
+    geo = tmp / "coarse.toml"
     geo.write_text("\n".join(lines) + "\n")
+    return geo
+
+
+def test_upd_disk_writes_the_fan_diagram(tmp_path, upd):
+    """`upd disk` on the coarse 6-blade disk: the fan's rows are nodal diameters 0..3, the
+    stuck damper stiffens the first family at every ND but 0 (the cylinder rolls there), and
+    fan.png is drawn."""
+    from conftest import assert_nonblank
+
+    geo = coarse_geometry_file(tmp_path)
     out = tmp_path / "out"
     r = upd("disk", "--geometry", str(geo), "--damper", "cylinder", "--n-blades", "6",
             "--families", "2", "--cb-modes", "12", "--out", str(out), "--json")  # fmt: skip

@@ -11,30 +11,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_disk import COARSE, PAPER
+from test_disk import coarse_geometry_file
 
 pytestmark = pytest.mark.mpi
-
-
-def _geometry_file(tmp: Path) -> Path:
-    import tomllib
-
-    data = tomllib.loads(PAPER.read_text())
-    data["rig"]["mesh"] = COARSE["rig"]["mesh"]
-    data["cylinder"].update(COARSE["cylinder"])
-    lines = []
-    for table, body in data.items():
-        for sub, vals in body.items():
-            if isinstance(vals, dict):
-                lines.append(f"[{table}.{sub}]")
-                lines += [f"{k} = {v!r}" for k, v in vals.items()]
-        flat = {k: v for k, v in body.items() if not isinstance(v, dict)}
-        if flat:
-            lines.append(f"[{table}]")
-            lines += [f"{k} = {v!r}" for k, v in flat.items()]
-    p = tmp / "coarse.toml"
-    p.write_text("\n".join(lines) + "\n")
-    return p
 
 
 def _run(tmp: Path, geo: Path, ranks: int) -> dict:
@@ -53,7 +32,7 @@ def _run(tmp: Path, geo: Path, ranks: int) -> dict:
 
 
 def test_upd_disk_under_mpirun_gives_the_serial_fan(tmp_path):
-    geo = _geometry_file(tmp_path)
+    geo = coarse_geometry_file(tmp_path)
     one, two = _run(tmp_path, geo, 1), _run(tmp_path, geo, 2)
     assert two["ranks"] == 2 and one["ranks"] == 1
     for key in ("fan_hz_stuck", "fan_hz_free"):

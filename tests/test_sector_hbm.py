@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_disk import coarse_geometry_file
 
 from workbench.errors import InputError
 
@@ -195,27 +196,6 @@ def test_sector_harmonic_balance_equals_the_whole_disk(disk, eo):
     print(f"EO {eo}: {ps:.6e} m at {fs:.6f} Hz, rel {ps / pf - 1:.1e}; sector {t_sector:.1f} s")
 
 
-def _coarse_geometry(tmp: Path) -> Path:
-    import tomllib
-
-    data = tomllib.loads(PAPER.read_text())
-    data["rig"]["mesh"] = COARSE["rig"]["mesh"]
-    data["cylinder"].update(COARSE["cylinder"])
-    lines = []
-    for table, body in data.items():
-        for sub, vals in body.items():
-            if isinstance(vals, dict):
-                lines.append(f"[{table}.{sub}]")
-                lines += [f"{k} = {v!r}" for k, v in vals.items()]
-        flat = {k: v for k, v in body.items() if not isinstance(v, dict)}
-        if flat:
-            lines.append(f"[{table}]")
-            lines += [f"{k} = {v!r}" for k, v in flat.items()]
-    geo = tmp / "coarse.toml"
-    geo.write_text("\n".join(lines) + "\n")
-    return geo
-
-
 def test_upd_disk_frf_writes_the_receptance_and_the_branch(tmp_path, upd):
     """`upd disk --frf --eo 5` on 6 blades: EO 5 is ND 1 travelling backward (said in the
     summary and the HDF5), the branch file carries units, the PNG is drawn; a negative EO is
@@ -223,7 +203,7 @@ def test_upd_disk_frf_writes_the_receptance_and_the_branch(tmp_path, upd):
     import h5py
     from conftest import assert_nonblank
 
-    geo = _coarse_geometry(tmp_path)
+    geo = coarse_geometry_file(tmp_path, COARSE)
     out = tmp_path / "out"
     r = upd("disk", "--geometry", str(geo), "--damper", "cylinder", "--n-blades", "6",
             "--families", "1", "--frf", "--eo", "5", "--force", "30", "--frf-modes", "6",
