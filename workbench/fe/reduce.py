@@ -99,8 +99,7 @@ def save_model(rm: ReducedModel, path: str | Path, contact=None) -> Path:
         if contact is not None:
             with h5py.File(tmp, "a") as h:
                 g = h.create_group("contact")
-                for k in ("points", "frames", "side", "weight"):
-                    g.create_dataset(k, data=np.asarray(getattr(contact, k)))
+                contact.write_h5(g)
                 g.attrs["kind"] = contact.kind
     return path
 
@@ -115,13 +114,7 @@ def load_contact(path: str | Path):
         if "contact" not in h:
             return None
         g = h["contact"]
-        return ContactSet(
-            points=g["points"][()],
-            frames=g["frames"][()],
-            side=g["side"][()],
-            weight=g["weight"][()],
-            kind=str(g.attrs["kind"]),
-        )
+        return ContactSet.read_h5(g, str(g.attrs["kind"]))
 
 
 def reduce_body(

@@ -111,8 +111,7 @@ class DiskSector:
             a["params"] = json.dumps(self.params)
             a["digest"] = self.digest
             a["stats"] = json.dumps(self.stats, default=float)
-            for name in ("points", "frames", "side", "weight"):
-                h[f"contact/{name}"] = getattr(self.contact, name)
+            self.contact.write_h5(h.require_group("contact"))
             for name in ("image_points", "excitation_point", "response_point"):
                 h[name] = getattr(self, name)
             h["excitation_direction"] = self.excitation_direction
@@ -125,13 +124,7 @@ class DiskSector:
         path = Path(path)
         with h5py.File(path, "r") as h:
             a = h.attrs
-            contact = ContactSet(
-                points=h["contact/points"][()],
-                frames=h["contact/frames"][()],
-                side=h["contact/side"][()],
-                weight=h["contact/weight"][()],
-                kind=str(a["contact_kind"]),
-            )
+            contact = ContactSet.read_h5(h["contact"], str(a["contact_kind"]))
             return cls(
                 damper=str(a["damper"]),
                 n_blades=int(a["n_blades"]),

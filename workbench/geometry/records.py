@@ -58,9 +58,21 @@ class ContactSet:
     weight: np.ndarray  # (n_pairs,) tributary length (m, lines) or area (m^2, faces)
     kind: str  # "line" (cone, cylinder) or "face" (wedge)
 
+    ARRAYS = ("points", "frames", "side", "weight")
+
     @property
     def n_pairs(self) -> int:
         return int(self.points.shape[0])
+
+    def write_h5(self, group) -> None:
+        """Write the arrays into an HDF5 group (the kind is the caller's to store)."""
+        for name in self.ARRAYS:
+            group[name] = getattr(self, name)
+
+    @classmethod
+    def read_h5(cls, group, kind: str) -> ContactSet:
+        """The contact set written by :meth:`write_h5` into ``group``, of ``kind``."""
+        return cls(**{name: group[name][()] for name in cls.ARRAYS}, kind=kind)
 
     def __post_init__(self) -> None:
         n = self.points.shape[0]
@@ -115,8 +127,7 @@ class BuiltGeometry:
             h.attrs["params"] = json.dumps(self.params)
             h.attrs["digest"] = self.digest
             h.attrs["stats"] = json.dumps(self.stats, default=float)
-            for name in ("points", "frames", "side", "weight"):
-                h[f"contact/{name}"] = getattr(self.contact, name)
+            self.contact.write_h5(h.require_group("contact"))
             h["excitation_points"] = self.excitation_points
             h["response_points"] = self.response_points
             h["excitation_direction"] = self.excitation_direction
@@ -132,13 +143,7 @@ class BuiltGeometry:
         path = Path(path)
         with h5py.File(path, "r") as h:
             a = h.attrs
-            contact = ContactSet(
-                points=h["contact/points"][()],
-                frames=h["contact/frames"][()],
-                side=h["contact/side"][()],
-                weight=h["contact/weight"][()],
-                kind=str(a["contact_kind"]),
-            )
+            contact = ContactSet.read_h5(h["contact"], str(a["contact_kind"]))
             return cls(
                 damper=str(a["damper"]),
                 rig_msh=path.parent / str(a["rig_msh"]),
