@@ -381,10 +381,13 @@ def write_outputs(spec, out, cases, worst, best, fans, eos, forces, summary, tim
 
     shape = (len(dampers), len(forces), len(eos))
     grid = {q: np.full(shape, np.nan) for q in ("peak_m", "peak_hz", "friction_energy_j")}
+    lower = np.zeros(shape, dtype=bool)
     for c in cases:
         i, j, k = dampers.index(c["damper"]), forces.index(c["force_n"]), eos.index(c["eo"])
         for q in grid:
             grid[q][i, j, k] = np.nan if c[q] is None else c[q]
+        # a curve that stopped early or peaks on its band edge: its peak is a lower bound
+        lower[i, j, k] = not c["completed"] or c["peak_at_band_edge"]
     units = {
         "peak_m": (
             "m",
@@ -424,10 +427,10 @@ def write_outputs(spec, out, cases, worst, best, fans, eos, forces, summary, tim
     curves = {(c["damper"], c["force_n"], c["eo"]): c for c in cases}
     paths = {
         "peaks": plot_peaks_vs_eo(
-            dampers, forces, eos, grid["peak_m"], n_b, figs / "bladed_disk_peaks.png"
+            dampers, forces, eos, grid["peak_m"], n_b, figs / "bladed_disk_peaks.png", lower
         ),
         "energy": plot_energy_vs_eo(
-            dampers, forces, eos, grid["friction_energy_j"], figs / "bladed_disk_energy.png"
+            dampers, forces, eos, grid["friction_energy_j"], figs / "bladed_disk_energy.png", lower
         ),
         "fan": plot_fan_eo(
             fans,

@@ -14,7 +14,9 @@ from ....render.palette import damper_color
 MARKERS = ("o", "s", "^", "D", "v", "P")
 
 
-def _per_damper(dampers, forces, eos, values, scale, ylabel, title, path):
+def _per_damper(dampers, forces, eos, values, scale, ylabel, title, path, lower=None, what=""):
+    """One panel per damper, one line per force; ``lower`` [damper, force, eo] marks the
+    cases whose curve stopped early or peaks on its band edge (ringed, labelled ``what``)."""
     plt = pyplot()
     n = len(dampers)
     fig, axes = plt.subplots(1, n, figsize=(4.2 * n + 0.6, 3.8), squeeze=False, sharey=True)
@@ -28,6 +30,17 @@ def _per_damper(dampers, forces, eos, values, scale, ylabel, title, path):
                 alpha=0.45 + 0.55 * (j + 1) / len(forces),
                 label=f"{f:g} N",
             )
+            if lower is not None and lower[i, j].any():
+                m = lower[i, j]
+                ax.plot(
+                    np.asarray(eos)[m],
+                    values[i, j][m] * scale,
+                    "o",
+                    ms=13,
+                    mfc="none",
+                    mec="black",
+                    label=f"stopped early or at the band edge: {what}",
+                )
         ax.set_title(f"{d}")
         ax.set_xlabel("engine order EO")
         ax.set_xticks(eos)
@@ -41,9 +54,11 @@ def _per_damper(dampers, forces, eos, values, scale, ylabel, title, path):
 
 
 @styled
-def plot_peaks_vs_eo(dampers, forces, eos, peak_m, n_blades, path: str | Path | None) -> Any:
+def plot_peaks_vs_eo(
+    dampers, forces, eos, peak_m, n_blades, path: str | Path | None, lower=None
+) -> Any:
     """Per damper the peak amplitude (µm) against EO, one line per force;
-    ``peak_m``: [damper, force, eo] in metres."""
+    ``peak_m``: [damper, force, eo] in metres; ``lower``: which are lower bounds."""
     fig = _per_damper(
         dampers,
         forces,
@@ -53,14 +68,16 @@ def plot_peaks_vs_eo(dampers, forces, eos, peak_m, n_blades, path: str | Path | 
         "peak |y| at the response point (µm)",
         f"Peak response against engine order, {n_blades} blades",
         path,
+        lower,
+        "a lower bound",
     )
     return save_figure(fig, path)
 
 
 @styled
-def plot_energy_vs_eo(dampers, forces, eos, energy_j, path: str | Path | None) -> Any:
+def plot_energy_vs_eo(dampers, forces, eos, energy_j, path: str | Path | None, lower=None) -> Any:
     """Per damper the friction energy per sector and cycle at the peak (mJ) against EO;
-    ``energy_j``: [damper, force, eo] in joules."""
+    ``energy_j``: [damper, force, eo] in joules; ``lower``: curves without their peak."""
     fig = _per_damper(
         dampers,
         forces,
@@ -70,6 +87,8 @@ def plot_energy_vs_eo(dampers, forces, eos, energy_j, path: str | Path | None) -
         "friction energy at the peak (mJ / sector / cycle)",
         "Friction energy dissipated by the damper against engine order",
         path,
+        lower,
+        "not at the peak",
     )
     return save_figure(fig, path)
 
