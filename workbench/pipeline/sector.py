@@ -51,13 +51,17 @@ def _j_perm(idx: np.ndarray, n_m: int) -> tuple[np.ndarray, np.ndarray]:
     return partner, sign
 
 
-def reduce_nd_closed(cs, k: int, n_modes: int, exc_node: int, out_rows: np.ndarray):
+def reduce_nd_closed(
+    cs, k: int, n_modes: int, exc_node: int, out_rows: np.ndarray, basis_out: dict | None = None
+):
     """Craig-Bampton of ND ``k`` with a J-closed modal basis: ``(K, M, J, exc, out)``.
 
     Interface: the platform contact nodes' master DOFs (copy, pair, x/y/z) as in
     :func:`workbench.fe.cyclic_cb.reduce_nd`. ``exc``: (copies, 3, m) rows of the
     basis at ``exc_node``; ``out``: (copies, n_out, m) the rows ``out_rows``
     (n_out, 3) applied to the response node's DOFs (``out_rows`` holds the node).
+    ``basis_out``: if a dict, ``basis_out[k]`` receives ``T Phi``, the basis on the extended sector
+    (``(a; b)`` stacked for two copies; the mistuning projection uses it).
     """
     from scipy.sparse.linalg import splu
 
@@ -94,6 +98,8 @@ def reduce_nd_closed(cs, k: int, n_modes: int, exc_node: int, out_rows: np.ndarr
     Phi[inner, nb:] = V
     K = Phi.T @ (Kk @ Phi)
     M = Phi.T @ (Mk @ Phi)
+    if basis_out is not None:
+        basis_out[k] = np.asarray(T @ Phi)
     J = None
     if copies == 2:
         partner, sign = _j_perm(np.arange(n), n_m)
@@ -144,6 +150,7 @@ def build_sector_model(
     n_damper_modes: int = 6,
     zeta: float = 0.005,
     law: str = "decoupled",
+    keep_basis: dict | None = None,
 ) -> SectorModel:
     """The sector harmonic-balance model of a DiskSector ``rec`` at the NDs ``nds``
     (default every ND 0..N/2).
@@ -153,6 +160,9 @@ def build_sector_model(
     ratio of the bladed sector's reduced modes of each ND (the damper undamped).
     The excitation is a unit force along ``rec.excitation_direction`` at the
     excitation point; the output the response point's displacement along it.
+    ``keep_basis``: if a dict, it receives ``"sector"`` (the bladed sector's
+    :class:`~workbench.fe.cyclic.CyclicSector`) and ``"basis"`` (per ND the reduced
+    basis on the extended sector, :func:`reduce_nd_closed`'s ``basis_out``).
     """
     from ..assembly.model import preloads
     from ..fe.cyclic import assemble_sector, damper_matrices
@@ -165,8 +175,11 @@ def build_sector_model(
     resp_node = _node_of(cs.coords, rec.response_point, "response point")
     out_rows = dict(dofs=3 * resp_node + np.arange(3), rows=d[None, :])
     blocks = {}
+    bases = None if keep_basis is None else keep_basis.setdefault("basis", {})
+    if keep_basis is not None:
+        keep_basis["sector"] = cs
     for k in nds:
-        K, M, J, exc, out, copies = reduce_nd_closed(cs, k, n_modes, exc_node, out_rows)
+        K, M, J, exc, out, copies = reduce_nd_closed(cs, k, n_modes, exc_node, out_rows, bases)
         C = modal_damping(M, K, zeta)
         blocks[k] = NdBlock(k, K, M, 0.5 * (C + C.T), copies, J, exc, out)
     Kd, Md, _, dnode = damper_matrices(rec)
