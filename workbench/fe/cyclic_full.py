@@ -20,8 +20,14 @@ from ..errors import SolveError
 from .cyclic import MATCH_REL_TOL, CyclicSector, _node_dofs
 
 
-def full_disk_matrices(cs: CyclicSector) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray]:
-    """``(K, M, coords)`` of the whole disk in the global frame (clamped nodes removed)."""
+def full_disk_matrices(
+    cs: CyclicSector, sector_K: list | None = None
+) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray]:
+    """``(K, M, coords)`` of the whole disk in the global frame (clamped nodes removed).
+
+    ``sector_K``: optional per-sector stiffness matrices (``N`` of them, each shaped like
+    ``cs.K``, sector ``j``'s own frame) instead of ``cs.K`` for every sector: a mistuned disk.
+    """
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
 
@@ -56,7 +62,8 @@ def full_disk_matrices(cs: CyclicSector) -> tuple[sp.csr_matrix, sp.csr_matrix, 
         P = sp.csr_matrix(
             (np.ones(len(rows)), (rows, _node_dofs(nodes[ok]))), shape=(3 * n, 3 * n_free)
         )
-        Kj, Mj = Q @ cs.K @ Q.T, Q @ cs.M @ Q.T
+        Kj = Q @ (cs.K if sector_K is None else sector_K[j]) @ Q.T
+        Mj = Q @ cs.M @ Q.T
         Ks.append(P.T @ Kj @ P)
         Ms.append(P.T @ Mj @ P)
     K, M = sum(Ks[1:], Ks[0]), sum(Ms[1:], Ms[0])
