@@ -66,6 +66,7 @@ def test_zero_mistuning_is_the_tuned_full_disk(disk, eo):
 def test_bad_deviations_are_one_line_errors():
     from workbench.pipeline.mistuning import (
         check_deviations,
+        linear_matrices,
         mistuned_forced_response,
         whitehead_bound,
     )
@@ -88,6 +89,9 @@ def test_bad_deviations_are_one_line_errors():
         with pytest.raises(InputError) as e:
             mistuned_forced_response(None, np.zeros(3), 1, force, band)  # refused before use
         assert e.value.param == param and "\n" not in str(e.value)
+    with pytest.raises(InputError) as e:
+        linear_matrices(None, np.zeros(3), 1, "slipping")
+    assert e.value.param == "damper" and "none, stuck, free" in str(e.value)
 
 
 HARMONICS = (0, 1, 2, 3)

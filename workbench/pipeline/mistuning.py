@@ -34,7 +34,9 @@ sectors' FE work. What it cannot hold: a mistuned shape outside the span of the
 tuned modes kept per ND (large or local mistuning, e.g. a cracked blade, needs
 more modes per ND or the mistuned sector's own modes).
 
-Linear limits (:func:`linear_blade_response`): ``"none"`` removes the dampers;
+With friction, :func:`mistuned_forced_response` follows the assembled disk by the
+ordinary harmonic balance (condensed onto every damper's contact DOFs), every blade an
+output. Linear limits (:func:`linear_blade_response`): ``"none"`` removes the dampers;
 ``"stuck"`` bonds every contact pair (springs ``kt, kt, kn`` in its frame);
 ``"free"`` keeps only the normal springs (the frictionless, fully slipping limit
 ``mu -> 0``). Damping: the tuned model's (modal ratio per ND block), not mistuned.
