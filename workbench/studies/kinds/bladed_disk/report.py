@@ -102,3 +102,88 @@ def bladed_disk_sections(
             ],
         }
     ]
+
+
+def extra_sections(
+    dampers: list[str], screen: list[dict], fields: list[dict], wcases: list[dict], paths: dict
+) -> list[dict]:
+    """The screen per nodal diameter, the contact status and the sector field at each
+    damper's worst peak. ``screen``: rows of ``nd_screen``; ``fields``: the worst-peak field
+    records; ``wcases``: the worst cases' records; ``paths``: the figures written."""
+    nds = sorted({int(r["nd"]) for r in screen})
+    by = {(r["damper"], int(r["nd"])): r for r in screen}
+    text = [
+        "The rig's coupling screen at every nodal diameter: on the sector model of each ND "
+        "the first family's frequency with every contact pair stuck (springs kt, kt, kn) "
+        "and with the tangential springs removed (the damper sliding freely, the normal "
+        "springs kept), the family being the mode with the largest receptance from the "
+        "excitation to the response point; k2/k = 1 - (f_sliding / f_stuck)^2 is the share "
+        "of the stuck mode's stiffness the sticking damper adds. A damper can only hold a "
+        "resonance down as far as it stiffens it; a k2/k near zero (or slightly negative: "
+        "the stuck damper's mass without stiffness) means it rolls or slides with the "
+        "platforms and adds no friction damping there.",
+        "k2/k per ND "
+        + ", ".join(str(k) for k in nds)
+        + ": "
+        + "; ".join(
+            f"{d} " + " ".join(f"{by[(d, k)]['k2_over_k']:.3f}" for k in nds if (d, k) in by)
+            for d in dampers
+        )
+        + ".",
+    ]
+    figures = []
+    if "k2k" in paths:
+        figures.append(
+            {
+                "path": "figures/bladed_disk_k2k.png",
+                "caption": "Left: k2/k against nodal diameter, one line per damper; grey "
+                "bands the NDs the study's engine orders excite, rings each damper's worst "
+                "EO at the largest force. Right: the stuck (solid) and sliding (dashed) "
+                "first-family frequencies (Hz).",
+            }
+        )
+    if "status" in paths:
+        figures.append(
+            {
+                "path": "figures/bladed_disk_status.png",
+                "caption": "Contact status of every pair along each damper's worst case "
+                "(its worst EO at the largest force), frequency on x, the peak dashed; the "
+                "title counts the pairs of each status at the peak.",
+            }
+        )
+    if "fields" in paths:
+        figures.append(
+            {
+                "path": "figures/bladed_disk_worst_fields.png",
+                "caption": "The sector at each damper's worst peak: colour the largest "
+                "displacement over the period (mm), shape the displacement at the instant the "
+                "response point is farthest out (exaggerated), the undeformed sector in grey; "
+                "the VTU files hold every harmonic's field.",
+            }
+        )
+    for f in fields:
+        text.append(
+            f"{f['damper']} worst peak (EO {f['eo']}, ND {f['nd']}, {f['force_n']:g} N, "
+            f"{f['peak_hz']:.1f} Hz): {f['peak_m'] * 1e3:.4f} mm at the response point; the "
+            f"field expanded from the solution gives {f['field_peak_m'] * 1e3:.4f} mm there "
+            f"(relative difference {f['field_rel_err']:.1e}); {f['vtu'].split('/')[-1]}."
+        )
+    for c in wcases:
+        counts = ", ".join(f"{v} {k}" for k, v in c["status_at_peak"].items() if v)
+        text.append(f"{c['damper']} at its worst peak: {counts}.")
+    return [
+        {
+            "id": "screen_nd",
+            "title": "Coupling screen per nodal diameter, contact status and field at the "
+            "worst peak",
+            "text": text,
+            "figures": figures,
+            "tables": [
+                {
+                    "path": "tables/bladed_disk_screen.csv",
+                    "caption": "Per damper and ND: stuck and sliding first-family "
+                    "frequencies (Hz), k2/k and f_stuck/f_sliding.",
+                }
+            ],
+        }
+    ]
