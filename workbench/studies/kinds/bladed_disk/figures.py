@@ -233,9 +233,18 @@ def plot_worst_status(cases, path: str | Path | None) -> Any:
         if k == 0:
             ax.set_ylabel("contact pair (side 0 below, side 1 above the dashed line)")
     from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
-    extra = [Line2D([], [], color="k", lw=1.6, ls=(0, (2, 1.5)), label="peak")]
-    fig.legend(handles=status_legend_handles() + extra, loc="lower center", ncol=5, frameon=False)
+    from ....render.palette import NOT_COMPUTED_COLOR, NOT_COMPUTED_EDGE
+
+    extra = [
+        Patch(
+            facecolor=NOT_COMPUTED_COLOR, edgecolor=NOT_COMPUTED_EDGE, hatch="////",
+            label="no point computed",
+        ),
+        Line2D([], [], color="k", lw=1.6, ls=(0, (2, 1.5)), label="peak"),
+    ]  # fmt: skip
+    fig.legend(handles=status_legend_handles() + extra, loc="lower center", ncol=6, frameon=False)
     fig.suptitle("Contact status of every pair in each damper's worst case", fontsize=11)
     fig.tight_layout(rect=(0, 0.07, 1, 1))
     return save_figure(fig, path)
@@ -261,11 +270,12 @@ def render_worst_fields(fields, path: str | Path) -> Path:
         w.points = g.points + scale * 1e-3 * np.asarray(g.point_data["disp_at_peak_instant_mm"])
         p.subplot(0, j)
         p.add_mesh(g, style="wireframe", color="grey", opacity=0.35, line_width=0.5)
+        last = j == n - 1
         p.add_mesh(
-            w, scalars="disp_max_mm", cmap="viridis", clim=(0.0, top),
-            scalar_bar_args={"title": "largest displacement (mm)", "n_labels": 4,
-                              "vertical": True, "position_x": 0.8, "position_y": 0.1,
-                              "height": 0.6, "width": 0.06},
+            w, scalars="disp_max_mm", cmap="viridis", clim=(0.0, top), show_scalar_bar=last,
+            scalar_bar_args={"title": "max displacement, mm", "n_labels": 4, "vertical": True,
+                             "position_x": 0.72, "position_y": 0.15, "height": 0.6,
+                             "width": 0.05, "title_font_size": 16, "label_font_size": 14},
         )  # fmt: skip
         p.add_text(
             f"{f['damper']}: EO {f['eo']} (ND {f['nd']}), {f['force_n']:g} N, "
@@ -276,6 +286,8 @@ def render_worst_fields(fields, path: str | Path) -> Path:
         # along the disk axis (y), the blade (radial, z) upright: the tangential (x)
         # vibration in the picture's plane
         p.view_vector((0.0, -1.0, 0.0), viewup=(0.0, 0.0, 1.0))
+        p.reset_camera()
+        p.camera.zoom(0.85)
     path = Path(path)
     with atomic_path(path) as tmp:
         p.screenshot(str(tmp.with_name(tmp.name + ".png")))
