@@ -17,7 +17,11 @@ costs nothing:
   written as ``cases/bladed_disk_<damper>_worst_peak.vtu``. The response point's
   amplitude along the excitation recomputed from that field is kept beside the
   case's peak (``field_peak_m``): they agree to round-off when the rebuilt basis
-  is the one the case was solved on.
+  is the one the case was solved on;
+* Hill's stability of that peak point as a state of the whole disk
+  (:func:`workbench.pipeline.sector_post.full_disk_stability`: the sector's
+  travelling wave on every sector and damper, polished by Newton on the whole
+  disk, then ARPACK): the verdict for that one point, a few seconds.
 """
 
 from __future__ import annotations
@@ -63,7 +67,13 @@ def damper_post(model, rec, worst: dict | None, spec, out: Path) -> dict[str, An
     ``x_peak``), the VTU of the sector at its peak and the field's check."""
     from ....fe.cyclic import assemble_sector
     from ....hbm.core.fourier import Fourier, default_nt
-    from ....pipeline.sector_post import nd_screen, peak_field, period_max, sector_vtk
+    from ....pipeline.sector_post import (
+        full_disk_stability,
+        nd_screen,
+        peak_field,
+        period_max,
+        sector_vtk,
+    )
 
     t0 = time.perf_counter()
     n_b = int(model.n_blades)
@@ -137,6 +147,15 @@ def damper_post(model, rec, worst: dict | None, spec, out: Path) -> dict[str, An
             "max_disp_m": float(pd["disp_max_mm"].max() * 1e-3),
             "vtu": str(path),
             "response_node": rn,
+            # Hill's method on the whole disk at this point (every ND, every damper)
+            "stability": full_disk_stability(
+                model,
+                int(worst["eo"]),
+                H,
+                float(worst["force_n"]),
+                np.array(worst["x_peak"]),
+                float(worst["peak_hz"]),
+            ),
         }
     res["wall_s"] = time.perf_counter() - t0
     return res

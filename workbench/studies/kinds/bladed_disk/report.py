@@ -40,8 +40,9 @@ def bladed_disk_sections(
         "Best damper per EO (smallest peak): "
         + "; ".join(f"EO {b['eo']} at {b['force_n']:g} N: {b['best_damper']}" for b in best)
         + ".",
-        "Stability is not computed on a sector (its Hill matrix only sees its own travelling "
-        "wave).",
+        "Stability is not computed along the curves (a sector's Hill matrix only sees its own "
+        "travelling wave); each damper's worst peak is checked as a state of the whole disk "
+        "(next section).",
     ]
     if failed:
         text.append(
@@ -168,6 +169,16 @@ def extra_sections(
             f"field expanded from the solution gives {f['field_peak_m'] * 1e3:.4f} mm there "
             f"(relative difference {f['field_rel_err']:.1e}); {f['vtu'].split('/')[-1]}."
         )
+        s = f.get("stability")
+        if s:
+            text.append(
+                f"{f['damper']} worst peak as a state of the whole disk (every ND, every "
+                f"damper; Hill's method at that one point): {s['verdict']}, largest real part "
+                f"of the Floquet exponents {s['max_real']:.3g} 1/s "
+                f"({s['max_real_over_w']:.2e} of the angular frequency)"
+                + (f"; {s['note']}" if s["note"] else "")
+                + "."
+            )
     for c in wcases:
         counts = ", ".join(f"{v} {k}" for k, v in c["status_at_peak"].items() if v)
         text.append(f"{c['damper']} at its worst peak: {counts}.")
