@@ -154,6 +154,13 @@ def test_screen_per_nd_is_the_rigs_screen_generalised(study):
     assert float(case["stuck_hz"]) == pytest.approx(st[1], rel=1e-8)
     assert first["screen"][1]["k2_over_k"] == pytest.approx(k2k[1], rel=1e-8)
     assert (out / "figures" / "bladed_disk_k2k.png").stat().st_size > 10_000
+    # the rig's onset forces: a case that slips at its peak is above the stuck response's
+    # slip onset (below it the stuck linear solution would hold everywhere), and its
+    # friction holds the peak below the stuck linear one (stuck receptance times force)
+    (w,) = first["worst"]
+    row = first["screen"][w["nd"]]
+    assert 0 < row["f_slip_n"] <= w["force_n"]
+    assert w["worst_peak_m"] < row["stuck_peak_m_per_n"] * w["force_n"]
 
 
 def test_worst_peak_field_and_status(study):

@@ -87,25 +87,80 @@ def _family(K: np.ndarray, M: np.ndarray, f: np.ndarray, R: np.ndarray) -> tuple
     return best
 
 
-def nd_screen(model, k: int) -> dict:
+def _onsets(model, k: int, f_stuck_hz: float, zeta: float, law: str):
+    """``(F_slip, pair, F_sep, pair, r)``: the rig's slip and separation onset forces
+    (:func:`workbench.assembly.screen.onset_forces`: per pair ``T(t) = F tau(t)``, ``N(t) =
+    N0 + F nu(t)`` from the stuck linear response per newton) on the harmonic-1 block at ND
+    ``k``, over the same +-4 half-power bandwidths about the stuck family, and the stuck
+    peak receptance ``r`` (m/N, harmonic-1 amplitude at the response point)."""
+    from ..assembly.screen import N_FREQ, N_TIME
+    from ..hbm.core.fourier import Fourier, default_nt
+    from ..hbm.core.sector import SectorBalance
+
+    hb = SectorBalance(model, int(k), Fourier((1,), default_nt((1,))), 1.0)
+    (b,) = hb.blocks
+    f = hb.P[b["sl"]]
+    _, _, W, _, _, R = _block_matrices(model, k)
+    n3 = hb.n3
+    w0 = 2 * np.pi * f_stuck_hz
+    omegas = w0 * (1 + 4 * max(zeta, 1e-4) * np.linspace(-1, 1, N_FREQ))
+    X = np.stack([np.linalg.solve(hb._stiffness(b, w), f) for w in omegas])  # (nw, n)
+    resp = float(np.hypot(*(R @ X.T)).max())
+    uc, us = (X @ W[:n3].T).reshape(len(omegas), -1, 3), (X @ W[n3:].T).reshape(len(omegas), -1, 3)
+    th = np.linspace(0, 2 * np.pi, N_TIME, endpoint=False)
+    ut = (
+        uc[:, :, None, :] * np.cos(th)[None, None, :, None]
+        + us[:, :, None, :] * np.sin(th)[None, None, :, None]
+    )  # (nw, np, nt, 3)
+    kt, kn = model.kt[None, :, None], model.kn[None, :, None]
+    t1, t2, nu = kt * ut[..., 0], kt * ut[..., 1], -kn * ut[..., 2]
+    tau = np.maximum(np.abs(t1), np.abs(t2)) if law == "decoupled" else np.hypot(t1, t2)
+    mu, n0 = model.mu[None, :, None], model.n0[None, :, None]
+    den = tau - mu * nu
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f_slip = np.where(den > 1e-300, mu * n0 / den, np.inf).min(axis=(0, 2))
+        f_sep = np.where(-nu > 1e-300, n0 / (-nu), np.inf).min(axis=(0, 2))
+    i, j = int(np.argmin(f_slip)), int(np.argmin(f_sep))
+    return float(f_slip[i]), i, float(f_sep[j]), j, resp
+
+
+def nd_screen(model, k: int, zeta: float | None = None) -> dict:
     """The coupling screen at ND ``k`` (module docstring): ``{"nd", "stuck_hz",
     "sliding_hz", "k2_over_k", "stuck_over_sliding", "stuck_mode", "sliding_mode"}``
-    (``*_mode``: which distinct elastic frequency of the block is the family, 1 = lowest)."""
+    (``*_mode``: which distinct elastic frequency of the block is the family, 1 = lowest).
+    With ``zeta`` (the sector's modal damping ratio) also the rig's onset forces per blade
+    (N; None: never): ``f_slip_n`` (the first pair reaches mu N(t) in the stuck linear
+    response), ``f_sep_n`` (the first normal load reaches zero), their pairs, ``f_cap_n =
+    (4 / pi) Q k2/k f_slip_n`` with ``Q = 1 / (2 zeta)``, and ``stuck_peak_m_per_n``."""
     K, M, W, kc2, f, R = _block_matrices(model, k)
     kn_only = kc2.copy().reshape(-1, 3)
     kn_only[:, :2] = 0.0
     kn_only = kn_only.ravel()
     f_st, i_st = _family(K + W.T @ (kc2[:, None] * W), M, f, R)
     f_sl, i_sl = _family(K + W.T @ (kn_only[:, None] * W), M, f, R)
-    return {
+    k2k = 1.0 - (f_sl / f_st) ** 2
+    out = {
         "nd": int(k),
         "stuck_hz": f_st,
         "sliding_hz": f_sl,
-        "k2_over_k": 1.0 - (f_sl / f_st) ** 2,
+        "k2_over_k": k2k,
         "stuck_over_sliding": f_st / f_sl,
         "stuck_mode": i_st,
         "sliding_mode": i_sl,
     }
+    if zeta is not None:
+        fs, i_s, fp, i_p, r = _onsets(model, k, f_st, zeta, model.law)
+        fin = np.isfinite
+        out.update(
+            stuck_peak_m_per_n=r,
+            f_slip_n=fs if fin(fs) else None,
+            slip_pair=i_s if fin(fs) else -1,
+            f_sep_n=fp if fin(fp) else None,
+            sep_pair=i_p if fin(fp) else -1,
+            # the rig's single-mode estimate of the force up to which the peak stays level
+            f_cap_n=(4 / np.pi) / (2 * zeta) * max(k2k, 0.0) * fs if fin(fs) else None,
+        )
+    return out
 
 
 def peak_field(cs, model, eo: int, harmonics: tuple[int, ...], x: np.ndarray, n_modes: int):

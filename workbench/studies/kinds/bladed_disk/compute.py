@@ -382,7 +382,7 @@ def _post(spec, out, recs, cp, plan, keys, cases, worst, models, comm, force) ->
                 zeta=ZETA,
             )
         i = picks[d]
-        res = damper_post(models[d], recs[d], None if i is None else cases[i], spec, out)
+        res = damper_post(models[d], recs[d], None if i is None else cases[i], spec, out, ZETA)
         write_json(cache / f"post_{pkeys[d]}.json", res)
         log.info("%s: screen and worst-peak field (%.1f s)", d, res["wall_s"])
         return {}

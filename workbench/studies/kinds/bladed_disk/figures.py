@@ -152,17 +152,21 @@ def plot_fan_eo(fans, n_blades, worst, cases, path: str | Path | None) -> Any:
 
 
 @styled
-def plot_k2k_vs_nd(dampers, screen, eo_nds, worst_nd, path: str | Path | None) -> Any:
+def plot_k2k_vs_nd(dampers, screen, eo_nds, worst_nd, path: str | Path | None, forces=()) -> Any:
     """The coupling screen per nodal diameter: ``k2/k = 1 - (f_sliding / f_stuck)^2`` of the
     first family against ND, one line per damper (``screen``: rows with ``damper``, ``nd``,
     ``k2_over_k``, ``stuck_hz``, ``sliding_hz``); the NDs the study's engine orders excite
     (``eo_nds``) shaded, each damper's worst ND at the largest force (``worst_nd``) ringed.
-    Right: the stuck and sliding frequencies themselves."""
+    Middle: the stuck and sliding frequencies themselves. Right (rows with ``f_slip_n``):
+    the slip onset force per blade of the stuck linear response, the study's ``forces``
+    as horizontal lines."""
     plt = pyplot()
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11.0, 4.2))
+    onset = all(r.get("f_slip_n") is not None for r in screen)
+    fig, axes = plt.subplots(1, 3 if onset else 2, figsize=(16.0 if onset else 11.0, 4.2))
+    ax, bx = axes[0], axes[1]
     n_nd = 1 + max(int(r["nd"]) for r in screen)
     for k in eo_nds:
-        for a in (ax, bx):
+        for a in axes:
             a.axvspan(k - 0.18, k + 0.18, color="0.88", lw=0, zorder=0)
     for j, d in enumerate(dampers):
         rows = sorted((r for r in screen if r["damper"] == d), key=lambda r: r["nd"])
@@ -180,6 +184,21 @@ def plot_k2k_vs_nd(dampers, screen, eo_nds, worst_nd, path: str | Path | None) -
             nd, [r["sliding_hz"] for r in rows], "--", marker="o", ms=4, mfc="none", color=c,
             label=f"{d} sliding",
         )  # fmt: skip
+        if onset:
+            axes[2].plot(
+                nd, [r["f_slip_n"] for r in rows], marker=MARKERS[j % len(MARKERS)], color=c,
+                label=d,
+            )  # fmt: skip
+    if onset:
+        cx = axes[2]
+        for f in forces:
+            cx.axhline(f, color="0.3", ls=":", lw=1.2)
+            cx.annotate(f"{f:g} N", (n_nd - 0.6, f), ha="right", va="bottom", fontsize=8)
+        cx.set_xlabel("nodal diameter k")
+        cx.set_ylabel("slip onset force per blade (N)")
+        cx.set_title("First pair slips (stuck linear response)")
+        cx.set_ylim(0.0, 1.15 * max([*forces, *(r["f_slip_n"] for r in screen)]))
+        cx.legend(fontsize=8, loc="lower right")
     ax.plot([], [], "o", ms=10, mfc="none", mec="k", label="worst EO's ND (largest force)")
     ax.axhline(0.0, color="k", lw=0.8)
     ax.set_xlabel("nodal diameter k")
@@ -190,7 +209,7 @@ def plot_k2k_vs_nd(dampers, screen, eo_nds, worst_nd, path: str | Path | None) -
     bx.set_ylabel("first-family frequency (Hz)")
     bx.set_title("Stuck and sliding linear limits")
     bx.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    for a in (ax, bx):
+    for a in axes:
         a.set_xticks(np.arange(n_nd))
         a.set_xlim(-0.4, n_nd - 0.6)
         a.grid(True, alpha=0.3)

@@ -157,7 +157,9 @@ def write_outputs(spec, out, cases, worst, best, fans, eos, forces, summary, tim
     ]
     wnd = {w["damper"]: w["nd"] for w in worst if w["force_n"] == f_max}
     eo_nds = sorted({nd_and_direction(e, n_b)[0] for e in eos})
-    paths["k2k"] = plot_k2k_vs_nd(dampers, screen, eo_nds, wnd, figs / "bladed_disk_k2k.png")
+    paths["k2k"] = plot_k2k_vs_nd(
+        dampers, screen, eo_nds, wnd, figs / "bladed_disk_k2k.png", forces
+    )
     if wcases:
         paths["status"] = plot_worst_status(wcases, figs / "bladed_disk_status.png")
     fields = summary["worst_peak_field"]

@@ -62,7 +62,7 @@ def vtu_path(out: Path, damper: str) -> Path:
     return Path(out) / "cases" / f"bladed_disk_{damper}_worst_peak.vtu"
 
 
-def damper_post(model, rec, worst: dict | None, spec, out: Path) -> dict[str, Any]:
+def damper_post(model, rec, worst: dict | None, spec, out: Path, zeta: float) -> dict[str, Any]:
     """The screen rows of every ND and, for the worst case ``worst`` (a case record with its
     ``x_peak``), the VTU of the sector at its peak and the field's check."""
     from ....fe.cyclic import assemble_sector
@@ -77,7 +77,7 @@ def damper_post(model, rec, worst: dict | None, spec, out: Path) -> dict[str, An
 
     t0 = time.perf_counter()
     n_b = int(model.n_blades)
-    rows = [{"damper": rec.damper, **nd_screen(model, k)} for k in range(n_b // 2 + 1)]
+    rows = [{"damper": rec.damper, **nd_screen(model, k, zeta)} for k in range(n_b // 2 + 1)]
     res: dict[str, Any] = {"damper": rec.damper, "screen": rows, "worst": None}
     if worst is not None and worst.get("x_peak"):
         H = tuple(int(h) for h in spec.harmonics)

@@ -122,7 +122,12 @@ def extra_sections(
         "of the stuck mode's stiffness the sticking damper adds. A damper can only hold a "
         "resonance down as far as it stiffens it; a k2/k near zero (or slightly negative: "
         "the stuck damper's mass without stiffness) means it rolls or slides with the "
-        "platforms and adds no friction damping there.",
+        "platforms and adds no friction damping there. As on the rig, the screen also "
+        "gives the force per blade at which the first pair slips (f_slip_n) or opens "
+        "(f_sep_n) in the stuck linear response near the family's resonance, and the "
+        "single-mode estimate f_cap_n = (4/pi) Q k2/k f_slip_n (Q = 1/(2 x 0.005)) of the "
+        "force up to which the peak stays level; below f_slip_n the damper stays stuck and "
+        "the peak is the stuck linear one.",
         "k2/k per ND "
         + ", ".join(str(k) for k in nds)
         + ": "
@@ -139,8 +144,10 @@ def extra_sections(
                 "path": "figures/bladed_disk_k2k.png",
                 "caption": "Left: k2/k against nodal diameter, one line per damper; grey "
                 "bands the NDs the study's engine orders excite, rings each damper's worst "
-                "EO at the largest force. Right: the stuck (solid) and sliding (dashed) "
-                "first-family frequencies (Hz).",
+                "EO at the largest force. Middle: the stuck (solid) and sliding (dashed) "
+                "first-family frequencies (Hz). Right: the force per blade at which the "
+                "first pair slips in the stuck linear response (N), the study's forces "
+                "dotted.",
             }
         )
     if "status" in paths:
