@@ -193,12 +193,14 @@ def plot_k2k_vs_nd(dampers, screen, eo_nds, worst_nd, path: str | Path | None, f
         cx = axes[2]
         for f in forces:
             cx.axhline(f, color="0.3", ls=":", lw=1.2)
-            cx.annotate(f"{f:g} N", (n_nd - 0.6, f), ha="right", va="bottom", fontsize=8)
+            cx.annotate(f"{f:g} N", (-0.3, f), ha="left", va="bottom", fontsize=8)
         cx.set_xlabel("nodal diameter k")
         cx.set_ylabel("slip onset force per blade (N)")
         cx.set_title("First pair slips (stuck linear response)")
-        cx.set_ylim(0.0, 1.15 * max([*forces, *(r["f_slip_n"] for r in screen)]))
-        cx.legend(fontsize=8, loc="lower right")
+        vals = [*forces, *(r["f_slip_n"] for r in screen)]
+        cx.set_yscale("log")  # a rolling damper's onset is orders of magnitude above
+        cx.set_ylim(0.6 * min(vals), 1.8 * max(vals))
+        cx.legend(fontsize=8, loc="upper right")
     ax.plot([], [], "o", ms=10, mfc="none", mec="k", label="worst EO's ND (largest force)")
     ax.axhline(0.0, color="k", lw=0.8)
     ax.set_xlabel("nodal diameter k")
