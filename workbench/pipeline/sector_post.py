@@ -24,6 +24,10 @@ sticking damper adds.
 harmonic's ND basis (:func:`workbench.pipeline.sector.nd_basis` and the cyclic
 transformation): per harmonic the cos and sin fields of sector 0 on every node
 of the sector mesh.
+
+:func:`full_disk_stability`: Hill's stability of one sector solution as a
+state of the whole disk (every ND, every damper), which a sector's own Hill
+matrix cannot give.
 """
 
 from __future__ import annotations

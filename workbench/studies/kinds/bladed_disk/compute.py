@@ -19,7 +19,10 @@ case; ``force`` recomputes. The cases are handed to whichever MPI rank is free
 (:func:`workbench.studies.engine.schedule.run_tasks`).
 
 The answer: per damper and force its worst EO (the largest peak) and, per
-EO and force, the damper with the smallest peak.
+EO and force, the damper with the smallest peak. After the cases, one task
+per damper (:mod:`.post`, cached too): the coupling screen at every ND and,
+at the damper's worst peak (largest force), the sector's field (VTU) and
+Hill's stability on the whole disk. The files: :mod:`.outputs`.
 """
 
 from __future__ import annotations
