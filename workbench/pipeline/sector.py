@@ -51,23 +51,21 @@ def _j_perm(idx: np.ndarray, n_m: int) -> tuple[np.ndarray, np.ndarray]:
     return partner, sign
 
 
-def reduce_nd_closed(
-    cs, k: int, n_modes: int, exc_node: int, out_rows: np.ndarray, basis_out: dict | None = None
-):
-    """Craig-Bampton of ND ``k`` with a J-closed modal basis: ``(K, M, J, exc, out)``.
+def nd_basis(cs, k: int, n_modes: int, mats=None) -> tuple[np.ndarray, np.ndarray, int]:
+    """The J-closed Craig-Bampton basis of ND ``k``: ``(Phi, pos, copies)``.
 
-    Interface: the platform contact nodes' master DOFs (copy, pair, x/y/z) as in
-    :func:`workbench.fe.cyclic_cb.reduce_nd`. ``exc``: (copies, 3, m) rows of the
-    basis at ``exc_node``; ``out``: (copies, n_out, m) the rows ``out_rows``
-    (n_out, 3) applied to the response node's DOFs (``out_rows`` holds the node).
-    ``basis_out``: if a dict, ``basis_out[k]`` receives ``T Phi``, the basis on the extended sector
-    (``(a; b)`` stacked for two copies; the mistuning projection uses it).
+    ``Phi`` (copies * n_m, m) maps the reduced coordinates to the master DOFs of
+    :func:`workbench.fe.cyclic.nd_matrices` (``(a_M; b_M)`` for two copies); the first
+    ``copies * 3 * n_pairs`` columns are the platform interface DOFs (copy, pair, x/y/z),
+    the rest the fixed-interface modes. ``pos[g]``: the master index of sector DOF ``g``
+    (-1: clamped or slave). The extended sector's field is ``transformation(cs, k) @ Phi
+    @ q``. ``mats``: ``nd_matrices(cs, k)`` when at hand.
     """
     from scipy.sparse.linalg import splu
 
     from ..fe.cyclic import eigen, nd_matrices
 
-    Kk, Mk, T = nd_matrices(cs, k)
+    Kk, Mk, T = mats or nd_matrices(cs, k)
     mdofs = cs.master_dofs()
     n_m = len(mdofs)
     copies = T.shape[0] // (3 * cs.n_nodes)
@@ -96,6 +94,29 @@ def reduce_nd_closed(
     Phi[b, :nb] = np.eye(nb)
     Phi[inner, :nb] = psi
     Phi[inner, nb:] = V
+    return Phi, pos, copies
+
+
+def reduce_nd_closed(
+    cs, k: int, n_modes: int, exc_node: int, out_rows: np.ndarray, basis_out: dict | None = None
+):
+    """Craig-Bampton of ND ``k`` with a J-closed modal basis: ``(K, M, J, exc, out)``.
+
+    Interface: the platform contact nodes' master DOFs (copy, pair, x/y/z) as in
+    :func:`workbench.fe.cyclic_cb.reduce_nd`. ``exc``: (copies, 3, m) rows of the
+    basis at ``exc_node``; ``out``: (copies, n_out, m) the rows ``out_rows``
+    (n_out, 3) applied to the response node's DOFs (``out_rows`` holds the node).
+    The basis: :func:`nd_basis`. ``basis_out``: if a dict, ``basis_out[k]`` receives
+    ``T Phi``, the basis on the extended sector (``(a; b)`` stacked for two copies; the
+    mistuning projection uses it).
+    """
+    from ..fe.cyclic import nd_matrices
+
+    mats = nd_matrices(cs, k)
+    Kk, Mk, T = mats
+    Phi, pos, copies = nd_basis(cs, k, n_modes, mats)
+    n_m = int((pos >= 0).sum())
+    n = Kk.shape[0]
     K = Phi.T @ (Kk @ Phi)
     M = Phi.T @ (Mk @ Phi)
     if basis_out is not None:

@@ -164,6 +164,24 @@ def _status_panel(ax, case: CaseResult, side_labels: bool = True) -> None:
     ax.grid(False)
 
 
+def draw_status_panel(
+    ax, freq_hz, status, side, peak_index: int, band_hz=None, side_labels: bool = True
+) -> None:
+    """The status-map panel of :func:`plot_status_map` from plain arrays (a curve that is
+    not a :class:`CaseResult`, e.g. a bladed-disk case): ``status`` (points, pairs),
+    ``peak_index`` the resonance point (-1: none), ``band_hz`` the band asked for."""
+    from types import SimpleNamespace
+
+    branch = SimpleNamespace(status=np.asarray(status), band_hz=band_hz)
+    case = SimpleNamespace(
+        freq_hz=np.asarray(freq_hz, dtype=float),
+        branch=branch,
+        side=np.asarray(side),
+        h1_peak_index=int(peak_index),
+    )
+    _status_panel(ax, case, side_labels)
+
+
 @styled
 def plot_status_map(
     cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None

@@ -19,7 +19,10 @@ case; ``force`` recomputes. The cases are handed to whichever MPI rank is free
 (:func:`workbench.studies.engine.schedule.run_tasks`).
 
 The answer: per damper and force its worst EO (the largest peak) and, per
-EO and force, the damper with the smallest peak.
+EO and force, the damper with the smallest peak. After the cases, one task
+per damper (:mod:`.post`, cached too): the coupling screen at every ND and,
+at the damper's worst peak (largest force), the sector's field (VTU) and
+Hill's stability on the whole disk. The files: :mod:`.outputs`.
 """
 
 from __future__ import annotations
@@ -33,15 +36,21 @@ import numpy as np
 
 from ....errors import InputError
 from ....io import digest, write_json
-from ....io.csv_rows import write_rows_csv
-from ...engine.outputs import write_manifest_and_report
 from ...engine.plan import solver_code_version
 from ...engine.schedule import run_tasks, study_comm
 from ...engine.spec import StudySpec
+from .outputs import nd_and_direction, write_outputs
 
 log = logging.getLogger(__name__)
 
 ZETA = 0.005  # modal damping ratio of the bladed sector's reduced modes (sector.py's default)
+RECORD_VERSION = 2  # 2: a case keeps its peak's unknowns and every point's contact status
+# The mean (harmonic-0) unknowns count in the continuation's arc length. At EO 0 the
+# damper's mean position drifts at the slip onset while the harmonics and the frequency
+# barely move; with weight 0 the step does not see that drift and the corrector, asked to
+# jump the mean, stops (the cone's EO-0 30 N branch at 434.27 Hz, before its resonance).
+# Elsewhere the curve is the same: peaks within 1.2e-5 of weight 0 on the shipped study.
+DC_WEIGHT = 1.0
 
 
 def study_eos(spec: StudySpec) -> list[int]:
@@ -54,16 +63,6 @@ def study_eos(spec: StudySpec) -> list[int]:
         if isinstance(e, bool) or not float(e).is_integer() or e < 0:
             raise InputError("eos", e, "whole numbers >= 0")
     return list(dict.fromkeys(int(e) for e in eos))
-
-
-def nd_and_direction(eo: int, n_blades: int) -> tuple[int, str]:
-    """The ND the harmonic-1 excitation of ``eo`` lives at and its wave's direction:
-    "standing" (ND 0 or N/2), "forward" (``eo mod N <= N/2``) or "backward"."""
-    k = eo % n_blades
-    nd = min(k, n_blades - k)
-    if nd == 0 or 2 * nd == n_blades:
-        return nd, "standing"
-    return nd, "forward" if k <= n_blades // 2 else "backward"
 
 
 def _sectors(spec: StudySpec, out: Path, comm) -> dict[str, Any]:
@@ -127,18 +126,25 @@ def case_key(rec, cp, spec: StudySpec, eo: int, force_n: float) -> str:
             "eo": int(eo),
             "force_n": float(force_n),
             "code": solver_code_version(),
+            "record": RECORD_VERSION,
+            "dc_weight": DC_WEIGHT,
         }
     )
 
 
 def solve_case(model, eo: int, force_n: float, harmonics: tuple[int, ...]) -> dict[str, Any]:
     """One case's record: the sector's forced response at ``eo`` and ``force_n`` and its peak."""
+    from ....hbm.core.options import SolverOptions
     from ....pipeline.sector import sector_forced_response
 
     t0 = time.perf_counter()
-    br, info = sector_forced_response(model, eo, force_n, None, harmonics)
+    opts = SolverOptions(dc_weight=DC_WEIGHT)
+    br, info = sector_forced_response(model, eo, force_n, None, harmonics, options=opts)
+    from ....contact.law import STATUS_NAMES
+
     amp = np.asarray(br.out_amp[:, 0], dtype=float)
     i = int(amp.argmax()) if len(amp) else -1
+    status = np.asarray(br.status, dtype=int).reshape(len(amp), -1)
     return {
         "eo": int(eo),
         "force_n": float(force_n),
@@ -153,6 +159,14 @@ def solve_case(model, eo: int, force_n: float, harmonics: tuple[int, ...]) -> di
         "friction_energy_j": float(np.sum(br.friction_energy[i])) if i >= 0 else None,
         "freq_hz": [float(v) for v in br.freq_hz],
         "amp_m": [float(v) for v in amp],
+        # per point the status of every pair (0 stuck .. 3 full separation, STATUS_NAMES)
+        "status": status.tolist(),
+        "side": [int(v) for v in model.side],  # 0: this sector's platform, 1: the next one's
+        "status_at_peak": (
+            {n: int(np.sum(status[i] == s)) for s, n in enumerate(STATUS_NAMES)} if i >= 0 else {}
+        ),
+        # the peak point's unknowns (SectorBalance's layout): the field at the peak
+        "x_peak": [float(v) for v in br.x[i]] if i >= 0 else [],
         "wall_s": time.perf_counter() - t0,
     }
 
@@ -297,6 +311,8 @@ def run_bladed_disk(spec: StudySpec, out: str | Path, *, force: bool = False) ->
         c["peak_at_band_edge"] = bool(amp) and int(np.argmax(amp)) in (0, len(amp) - 1)
         cases.append(c)
     worst, best = answer(cases, list(spec.dampers), forces, eos)
+    with stage(timings, "screen and worst-peak fields"):
+        post = _post(spec, out, recs, cp, plan, keys, cases, worst, models, comm, force)
     summary: dict[str, Any] = {
         "study": spec.name,
         "kind": "bladed_disk",
@@ -325,6 +341,8 @@ def run_bladed_disk(spec: StudySpec, out: str | Path, *, force: bool = False) ->
             if c["peak_at_band_edge"]
         ],
     }
+    summary["screen"] = [r for d in spec.dampers for r in post[d]["screen"]]
+    summary["worst_peak_field"] = [post[d]["worst"] for d in spec.dampers if post[d]["worst"]]
     if rank == 0:
         timings["total"] = time.perf_counter() - t_start
         summary["timings_s"] = {k: round(v, 2) for k, v in timings.items()}
@@ -334,141 +352,44 @@ def run_bladed_disk(spec: StudySpec, out: str | Path, *, force: bool = False) ->
     return summary
 
 
-def write_outputs(spec, out, cases, worst, best, fans, eos, forces, summary, timings) -> None:
-    """Tables (CSV), results (HDF5 with units), figures, summary JSON and report (rank 0)."""
-    import h5py
-
-    from .figures import plot_energy_vs_eo, plot_fan_eo, plot_peaks_vs_eo
-    from .report import bladed_disk_sections
-
-    n_b = int(spec.bladed_disk.n_blades)
-    dampers = list(spec.dampers)
-    tables, figs = out / "tables", out / "figures"
-    tables.mkdir(parents=True, exist_ok=True)
-    figs.mkdir(parents=True, exist_ok=True)
-    cols = [
-        "damper",
-        "eo",
-        "nd",
-        "direction",
-        "force_n",
-        "peak_m",
-        "peak_hz",
-        "friction_energy_j",
-        "stuck_hz",
-        "peak_at_band_edge",
-        "completed",
-        "cached",
-        "n_points",
-        "wall_s",
-        "message",
-    ]
-    write_rows_csv(tables / "bladed_disk_cases.csv", cases, cols)
-    write_rows_csv(tables / "bladed_disk_worst.csv", worst)
-    write_rows_csv(tables / "bladed_disk_best.csv", best)
-    fan_rows = [
-        {
-            "nodal_diameter": k,
-            **{
-                f"{d}_family_{j + 1}_hz": float(fans[d][k, j])
-                for d in dampers
-                for j in range(fans[d].shape[1])
-            },
-        }
-        for k in range(n_b // 2 + 1)
-    ]
-    write_rows_csv(tables / "bladed_disk_fan.csv", fan_rows)
-
-    shape = (len(dampers), len(forces), len(eos))
-    grid = {q: np.full(shape, np.nan) for q in ("peak_m", "peak_hz", "friction_energy_j")}
-    lower = np.zeros(shape, dtype=bool)
-    for c in cases:
-        i, j, k = dampers.index(c["damper"]), forces.index(c["force_n"]), eos.index(c["eo"])
-        for q in grid:
-            grid[q][i, j, k] = np.nan if c[q] is None else c[q]
-        # a curve that stopped early or peaks on its band edge: its peak is a lower bound
-        lower[i, j, k] = not c["completed"] or c["peak_at_band_edge"]
-    units = {
-        "peak_m": (
-            "m",
-            "peak amplitude of the response point along the excitation [damper, force, eo]",
-        ),
-        "peak_hz": ("Hz", "frequency of the peak [damper, force, eo]"),
-        "friction_energy_j": (
-            "J",
-            "friction energy per sector and cycle at the peak [damper, force, eo]",
-        ),
-        "forces_n": ("N", "harmonic-1 force on each blade"),
-        "eos": ("1", "engine orders"),
-        "nd": ("1", "nodal diameter of the harmonic-1 excitation of each EO"),
-        "nodal_diameters": ("1", "nodal diameters of the fan diagram"),
-    }
-    with h5py.File(out / "bladed_disk.h5", "w") as h:
-        for q, a in grid.items():
-            h[q] = a
-        h["forces_n"] = np.array(forces)
-        h["eos"] = np.array(eos)
-        h["nd"] = np.array([nd_and_direction(e, n_b)[0] for e in eos])
-        h["nodal_diameters"] = np.arange(n_b // 2 + 1)
-        h.attrs["dampers"] = json_list(dampers)
-        h.attrs["direction"] = json_list([nd_and_direction(e, n_b)[1] for e in eos])
-        h.attrs["n_blades"] = n_b
-        for d in dampers:
-            name = f"fan_stuck_hz/{d}"
-            h[name] = fans[d]
-            h[name].attrs["unit"] = "Hz"
-            h[name].attrs["description"] = (
-                "stuck-damper cyclic frequencies [nodal diameter, family]"
-            )
-        for q, (u, text) in units.items():
-            h[q].attrs["unit"] = u
-            h[q].attrs["description"] = text
-
-    curves = {(c["damper"], c["force_n"], c["eo"]): c for c in cases}
-    paths = {
-        "peaks": plot_peaks_vs_eo(
-            dampers, forces, eos, grid["peak_m"], n_b, figs / "bladed_disk_peaks.png", lower
-        ),
-        "energy": plot_energy_vs_eo(
-            dampers, forces, eos, grid["friction_energy_j"], figs / "bladed_disk_energy.png", lower
-        ),
-        "fan": plot_fan_eo(
-            fans,
-            n_b,
-            worst,
-            [c for c in curves.values() if c["peak_hz"]],
-            figs / "bladed_disk_fan.png",
-        ),
-    }
-    summary["files"] = {
-        "h5": str(out / "bladed_disk.h5"),
-        "cases_csv": str(tables / "bladed_disk_cases.csv"),
-        "worst_csv": str(tables / "bladed_disk_worst.csv"),
-        "best_csv": str(tables / "bladed_disk_best.csv"),
-        **{f"{k}_png": str(p) for k, p in paths.items()},
-    }
-    head = [
-        f"{w['damper']} at {w['force_n']:g} N: worst EO {w['worst_eo']} (ND {w['nd']}, "
-        f"{w['direction']}), peak {w['worst_peak_m']:.4g} m at {w['peak_hz']:.1f} Hz"
-        + (f" (branch stopped early at EO {w['stopped_eos']})" if w["stopped_eos"] else "")
-        for w in worst
-    ]
-    summary["headline"] = head
-    sections = bladed_disk_sections(
-        n_b, eos, summary["eo_nd"], worst, best, summary["failed"], summary["at_band_edge"]
-    )
-    write_manifest_and_report(
-        out,
-        spec,
-        f"bladed disk of {n_b} blades: dampers x engine orders x forces,",
-        head,
-        timings,
-        sections,
-    )
-    write_json(out / "bladed_disk.json", summary)
-
-
-def json_list(v: list) -> str:
+def _post(spec, out, recs, cp, plan, keys, cases, worst, models, comm, force) -> dict:
+    """Per damper the screen at every ND and the field at its worst peak (the worst EO at
+    the largest force): :func:`.post.damper_post`, cached, one task per damper on any rank."""
     import json
 
-    return json.dumps(v)
+    from ....pipeline.sector import build_sector_model
+    from .post import damper_post, post_key
+
+    cache = out / "cache" / "bladed_disk"
+    f_max = max(float(f) for f in spec.forces)
+    at = {(d, e, f): i for i, (d, e, f) in enumerate(plan)}
+    picks, pkeys = {}, {}
+    for d in spec.dampers:
+        w = next((w for w in worst if w["damper"] == d and w["force_n"] == f_max), None)
+        i = None if w is None else at[(d, w["worst_eo"], f_max)]
+        picks[d] = i
+        pkeys[d] = post_key(
+            keys[i] if i is not None else "", recs[d].digest, cp, spec, ZETA, RECORD_VERSION
+        )
+    todo = [d for d in spec.dampers if force or not (cache / f"post_{pkeys[d]}.json").is_file()]
+
+    def work(k: int) -> dict:
+        d = todo[k]
+        if d not in models:
+            models[d] = build_sector_model(
+                recs[d],
+                cp,
+                None,
+                n_modes=int(spec.bladed_disk.sector_modes),
+                n_damper_modes=int(spec.bladed_disk.damper_modes),
+                zeta=ZETA,
+            )
+        i = picks[d]
+        res = damper_post(models[d], recs[d], None if i is None else cases[i], spec, out, ZETA)
+        write_json(cache / f"post_{pkeys[d]}.json", res)
+        log.info("%s: screen and worst-peak field (%.1f s)", d, res["wall_s"])
+        return {}
+
+    if todo:
+        run_tasks(len(todo), work, comm, desc=f"{spec.name}: screen")
+    return {d: json.loads((cache / f"post_{pkeys[d]}.json").read_text()) for d in spec.dampers}

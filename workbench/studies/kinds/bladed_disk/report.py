@@ -40,8 +40,9 @@ def bladed_disk_sections(
         "Best damper per EO (smallest peak): "
         + "; ".join(f"EO {b['eo']} at {b['force_n']:g} N: {b['best_damper']}" for b in best)
         + ".",
-        "Stability is not computed on a sector (its Hill matrix only sees its own travelling "
-        "wave).",
+        "Stability is not computed along the curves (a sector's Hill matrix only sees its own "
+        "travelling wave); each damper's worst peak is checked as a state of the whole disk "
+        "(next section).",
     ]
     if failed:
         text.append(
@@ -99,6 +100,108 @@ def bladed_disk_sections(
                     "every damper's peak (m).",
                 },
                 {"path": "tables/bladed_disk_cases.csv", "caption": "Every case."},
+            ],
+        }
+    ]
+
+
+def extra_sections(
+    dampers: list[str], screen: list[dict], fields: list[dict], wcases: list[dict], paths: dict
+) -> list[dict]:
+    """The screen per nodal diameter, the contact status and the sector field at each
+    damper's worst peak. ``screen``: rows of ``nd_screen``; ``fields``: the worst-peak field
+    records; ``wcases``: the worst cases' records; ``paths``: the figures written."""
+    nds = sorted({int(r["nd"]) for r in screen})
+    by = {(r["damper"], int(r["nd"])): r for r in screen}
+    text = [
+        "The rig's coupling screen at every nodal diameter: on the sector model of each ND "
+        "the first family's frequency with every contact pair stuck (springs kt, kt, kn) "
+        "and with the tangential springs removed (the damper sliding freely, the normal "
+        "springs kept), the family being the mode with the largest receptance from the "
+        "excitation to the response point; k2/k = 1 - (f_sliding / f_stuck)^2 is the share "
+        "of the stuck mode's stiffness the sticking damper adds. A damper can only hold a "
+        "resonance down as far as it stiffens it; a k2/k near zero (or slightly negative: "
+        "the stuck damper's mass without stiffness) means it rolls or slides with the "
+        "platforms and adds no friction damping there. As on the rig, the screen also "
+        "gives the force per blade at which the first pair slips (f_slip_n) or opens "
+        "(f_sep_n) in the stuck linear response near the family's resonance, and the "
+        "single-mode estimate f_cap_n = (4/pi) Q k2/k f_slip_n (Q = 1/(2 x 0.005)) of the "
+        "force up to which the peak stays level; below f_slip_n the damper stays stuck and "
+        "the peak is the stuck linear one.",
+        "k2/k per ND "
+        + ", ".join(str(k) for k in nds)
+        + ": "
+        + "; ".join(
+            f"{d} " + " ".join(f"{by[(d, k)]['k2_over_k']:.3f}" for k in nds if (d, k) in by)
+            for d in dampers
+        )
+        + ".",
+    ]
+    figures = []
+    if "k2k" in paths:
+        figures.append(
+            {
+                "path": "figures/bladed_disk_k2k.png",
+                "caption": "Left: k2/k against nodal diameter, one line per damper; grey "
+                "bands the NDs the study's engine orders excite, rings each damper's worst "
+                "EO at the largest force. Middle: the stuck (solid) and sliding (dashed) "
+                "first-family frequencies (Hz). Right: the force per blade at which the "
+                "first pair slips in the stuck linear response (N), the study's forces "
+                "dotted.",
+            }
+        )
+    if "status" in paths:
+        figures.append(
+            {
+                "path": "figures/bladed_disk_status.png",
+                "caption": "Contact status of every pair along each damper's worst case "
+                "(its worst EO at the largest force), frequency on x, the peak dashed; the "
+                "title counts the pairs of each status at the peak.",
+            }
+        )
+    if "fields" in paths:
+        figures.append(
+            {
+                "path": "figures/bladed_disk_worst_fields.png",
+                "caption": "The sector at each damper's worst peak: colour the largest "
+                "displacement over the period (mm), shape the displacement at the instant the "
+                "response point is farthest out (exaggerated), the undeformed sector in grey; "
+                "the VTU files hold every harmonic's field.",
+            }
+        )
+    for f in fields:
+        text.append(
+            f"{f['damper']} worst peak (EO {f['eo']}, ND {f['nd']}, {f['force_n']:g} N, "
+            f"{f['peak_hz']:.1f} Hz): {f['peak_m'] * 1e3:.4f} mm at the response point; the "
+            f"field expanded from the solution gives {f['field_peak_m'] * 1e3:.4f} mm there "
+            f"(relative difference {f['field_rel_err']:.1e}); {f['vtu'].split('/')[-1]}."
+        )
+        s = f.get("stability")
+        if s:
+            text.append(
+                f"{f['damper']} worst peak as a state of the whole disk (every ND, every "
+                f"damper; Hill's method at that one point): {s['verdict']}, largest real part "
+                f"of the Floquet exponents {s['max_real']:.3g} 1/s "
+                f"({s['max_real_over_w']:.2e} of the angular frequency)"
+                + (f"; {s['note']}" if s["note"] else "")
+                + "."
+            )
+    for c in wcases:
+        counts = ", ".join(f"{v} {k}" for k, v in c["status_at_peak"].items() if v)
+        text.append(f"{c['damper']} at its worst peak: {counts}.")
+    return [
+        {
+            "id": "screen_nd",
+            "title": "Coupling screen per nodal diameter, contact status and field at the "
+            "worst peak",
+            "text": text,
+            "figures": figures,
+            "tables": [
+                {
+                    "path": "tables/bladed_disk_screen.csv",
+                    "caption": "Per damper and ND: stuck and sliding first-family "
+                    "frequencies (Hz), k2/k and f_stuck/f_sliding.",
+                }
             ],
         }
     ]
