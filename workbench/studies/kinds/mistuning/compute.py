@@ -317,6 +317,8 @@ def run_mistuning(spec: StudySpec, out: str | Path, *, force: bool = False) -> d
         computed = {todo[r["k"]] for r in records}
         for i, key in enumerate(keys):
             t = json.loads((cache / f"{key}.json").read_text())
+            # a pattern of zeros shares the tuned disk's file: the plan says which task it is
+            t["damper"], t["pattern"] = plan[i][0], plan[i][2]
             t["cached"] = i not in computed
             tasks.append(t)
         summary = {
