@@ -212,3 +212,13 @@ def test_bad_input_names_the_option(tmp_path, change, name):
         _spec(tmp_path, **change)
     assert e.value.param == name
     assert "\n" not in str(e.value)
+
+
+def test_the_shipped_study_file_loads():
+    from workbench.studies.engine.spec import load_study
+    from workbench.studies.kinds.mistuning.patterns import study_patterns
+
+    spec = load_study(ROOT / "studies" / "mistuning.toml")
+    assert spec.kind == "mistuning" and spec.bladed_disk.n_blades == 8
+    pats = study_patterns(spec)
+    assert pats.df.shape == (50, 8) and np.all(1 + pats.df > 0)

@@ -52,6 +52,8 @@ def plot_af_histograms(
     """Per damper (columns) and EO (rows) the histogram of the amplification factor over the
     patterns, one outline per configuration, its 95th percentile a vertical line; Whitehead's
     bound a dashed black line."""
+    from matplotlib.ticker import MaxNLocator
+
     plt = pyplot()
     colors = config_colors(configs)
     fig, axes = _grid(plt, len(eos), len(dampers), 4.4, 3.4, squeeze=False, sharex=True)
@@ -72,6 +74,7 @@ def plot_af_histograms(
             ax.axvline(bound, color="k", ls="--", lw=1.2, label=f"Whitehead bound {bound:.2f}")
             ax.axvline(1.0, color="k", lw=0.6, alpha=0.5)
             ax.set_title(f"{d}, EO {e}")
+            ax.yaxis.set_major_locator(MaxNLocator(integer=True))
             ax.grid(True, alpha=0.3)
             if r == len(eos) - 1:
                 ax.set_xlabel("amplification factor (worst blade / tuned peak)")
@@ -103,7 +106,7 @@ def plot_af_comparison(
     plt = pyplot()
     colors = config_colors(configs)
     cols = [(d, e) for d in dampers for e in eos]
-    fig, axes = _grid(plt, 2, len(cols), 4.2, 3.6, squeeze=False)
+    fig, axes = _grid(plt, 2, len(cols), 4.2, 3.6, squeeze=False, sharey="row")
     rng = np.random.default_rng(0)  # jitter of the dots only
     ringed = False
     for c, (d, e) in enumerate(cols):
@@ -129,7 +132,7 @@ def plot_af_comparison(
             if row == 0:
                 ax.axhline(bound, color="k", ls="--", lw=1.2)
                 ax.axhline(1.0, color="k", lw=0.6, alpha=0.5)
-                ax.set_title(f"{d}, EO {e}", color=damper_color(d))
+                ax.set_title(f"{d}, EO {e}")
             else:
                 ax.set_yscale("log")
                 readable_log(ax, "y")

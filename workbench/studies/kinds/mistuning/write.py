@@ -345,8 +345,14 @@ def write_outputs(spec, out: Path, tasks, pats, curves, summary: dict, timings: 
     summary["whitehead_bound"] = bound
     summary["stats"] = stats
     summary["answer"] = answer
-    summary["failed"] = [
-        {k: t.get(k) for k in ("damper", "eo", "pattern", "config", "message")}
+    summary["failed"] = [  # patterns numbered from 1, as in the tables
+        {
+            "damper": t["damper"],
+            "eo": t["eo"],
+            "pattern": "tuned" if t["pattern"] == TUNED else t["pattern"] + 1,
+            "config": t["config"],
+            "message": t["message"],
+        }
         for t in tasks
         if not t["completed"]
     ]
