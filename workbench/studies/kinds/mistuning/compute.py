@@ -136,7 +136,8 @@ def solve_task(mm, eo: int, df: np.ndarray, config, spec: StudySpec) -> dict[str
     if isinstance(config, str):
         band = band_of(f0[config], df, True)
         peak, at = blade_peaks(mm, delta, eo, band, config, N_FREQ)
-        edge = (np.abs(at - band[0]) <= 1e-9 * band[1]) | (np.abs(at - band[1]) <= 1e-9 * band[1])
+        half = 0.5 * (band[1] - band[0]) / (N_FREQ - 1)  # within half a step of a band end
+        edge = (at <= band[0] + half) | (at >= band[1] - half)
         rec.update(completed=True, message="linear", n_points=N_FREQ, lower=edge.tolist())
     else:
         from ....hbm.core.options import SolverOptions
