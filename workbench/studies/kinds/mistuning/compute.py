@@ -17,10 +17,10 @@ whole disk, :func:`workbench.pipeline.mistuning.mistuned_disk_system`). Each giv
 blade's peak response (its response point along the excitation direction) per newton of
 force and the frequency of that peak:
 
-- linear: :func:`workbench.pipeline.mistuning.blade_peaks` (the receptance, m/N: 200
-  frequencies, then each maximum refined) over ``[0.9 (1 + min df), 1.1 (1 + max df)]``
-  times the tuned disk's first frequency at the EO's nodal diameter (no damper: the bladed
-  sector's own; stuck: with the damper stuck);
+- linear: :func:`workbench.pipeline.mistuning.blade_peaks` (the receptance, m/N: 100
+  frequencies and the natural ones in the band, then each blade's maximum refined) over
+  ``[0.9 (1 + min df), 1.1 (1 + max df)]`` times the tuned disk's first frequency at the
+  EO's nodal diameter (no damper: the bladed sector's own; stuck: with the damper stuck);
 - friction: the sweep over ``[0.95 (1 + min df), 1.03 (1 + max df)]`` times the tuned stuck
   frequency (``min df``, ``max df`` taken with 0), harmonics ``harmonics``, AFT samples a
   multiple of N (:func:`aft_samples`); a blade's peak is the top of its harmonic-1
@@ -66,7 +66,7 @@ log = logging.getLogger(__name__)
 LINEAR = ("none", "stuck")
 LINEAR_BAND = (0.9, 1.1)  # times the tuned frequency, widened by the pattern's spread
 FRICTION_BAND = (0.95, 1.03)
-N_FREQ = 200  # frequencies of a linear scan before the peaks are refined
+N_FREQ = 100  # frequencies of a linear scan (and the natural ones) before the peaks are refined
 
 
 def _code() -> str:
