@@ -121,7 +121,9 @@ def test_tables_results_and_figures_are_written_with_units(study):
         np.testing.assert_array_equal(h["af"][0, 0], worst / tuned[:, None])
     for name in ("af_hist", "af_compare", "worst_response"):
         assert (out / "figures" / f"mistuning_{name}.png").stat().st_size > 10_000
-    assert (out / "report.html").is_file()
+    html = (out / "report.html").read_text()
+    for name in ("n-blades", "eos", "sector-modes", "mistuning-std", "mistuning-patterns"):
+        assert name in html  # the Inputs table: the bladed-disk options the study reads too
     (a,) = first["answer"]
     assert a["best_damper"] == "cylinder" and a["force_n"] == 10.0
 

@@ -26,5 +26,16 @@ KIND = StudyKind(
     options=MistuningOptions,
     check=check,
     order=7,
-    shows=("dampers", "forces"),
+    # the disk and its engine orders are the bladed-disk study's options
+    shows=(
+        "dampers",
+        "forces",
+        "n-blades",
+        "eos",
+        "sector-modes",
+        "damper-modes",
+        "contact-mesh-size",
+        "damper-mesh-size",
+        "contact-points",
+    ),
 )
