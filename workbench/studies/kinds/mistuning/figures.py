@@ -63,13 +63,16 @@ def plot_af_histograms(
     for r, e in enumerate(eos):
         for c, d in enumerate(dampers):
             ax = axes[r, c]
-            for k, label in configs:
+            for i, (k, label) in enumerate(configs):
                 a = np.asarray(af.get((d, e, k), []), float)
                 a = a[np.isfinite(a)]
                 if not len(a):
                     continue
                 p95 = float(np.percentile(a, 95))
-                ax.hist(a, bins=bins, histtype="step", lw=1.6, color=colors[k], label=label)
+                # thinner in drawing order: a configuration equal to an earlier one (a damper
+                # that stays stuck) shows on top of it without hiding it
+                lw = max(3.0 - 0.7 * i, 1.0)
+                ax.hist(a, bins=bins, histtype="step", lw=lw, color=colors[k], label=label)
                 ax.axvline(p95, color=colors[k], lw=1.0, ls=":")
             ax.axvline(bound, color="k", ls="--", lw=1.2, label=f"Whitehead bound {bound:.2f}")
             ax.axvline(1.0, color="k", lw=0.6, alpha=0.5)
