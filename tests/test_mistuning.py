@@ -64,7 +64,12 @@ def test_zero_mistuning_is_the_tuned_full_disk(disk, eo):
 
 
 def test_bad_deviations_are_one_line_errors():
-    from workbench.pipeline.mistuning import check_deviations, whitehead_bound
+    from workbench.pipeline.mistuning import (
+        check_deviations,
+        linear_matrices,
+        mistuned_forced_response,
+        whitehead_bound,
+    )
 
     assert check_deviations([0.01, -0.02, 0.0], 3).tolist() == [0.01, -0.02, 0.0]
     bad = (
@@ -80,6 +85,13 @@ def test_bad_deviations_are_one_line_errors():
         assert e.value.param == param and "\n" not in str(e.value), str(e.value)
     assert "1 + delta" in str(pytest.raises(InputError, check_deviations, [-2, 0, 0], 3).value)
     assert whitehead_bound(4) == 1.5 and abs(whitehead_bound(6) - 1.7247449) < 1e-7
+    for force, band, param in ((-1.0, (1.0, 2.0), "force"), (1.0, (2.0, 1.0), "band_hz[1]")):
+        with pytest.raises(InputError) as e:
+            mistuned_forced_response(None, np.zeros(3), 1, force, band)  # refused before use
+        assert e.value.param == param and "\n" not in str(e.value)
+    with pytest.raises(InputError) as e:
+        linear_matrices(None, np.zeros(3), 1, "slipping")
+    assert e.value.param == "damper" and "none, stuck, free" in str(e.value)
 
 
 HARMONICS = (0, 1, 2, 3)
@@ -239,17 +251,14 @@ def test_mistuned_harmonic_balance_at_a_low_force_is_the_stuck_linear_disk(disk)
     """A mistuned pattern at 0.05 N: every contact stays stuck, so the harmonic balance of
     the assembled mistuned disk gives each blade the linear bonded-damper receptance times
     the force (1e-6 relative), near the EO-1 resonance."""
-    from workbench.hbm.core.options import SolverOptions
-    from workbench.hbm.forced.response import frequency_response
-    from workbench.pipeline.mistuning import linear_blade_response, mistuned_disk_system
+    from workbench.pipeline.mistuning import linear_blade_response, mistuned_forced_response
 
     _, mm = disk
     dev = np.array([0.04, -0.03, 0.01, 0.05, -0.02, -0.04])
-    system, f1, O = mistuned_disk_system(mm, dev, 1)
-    opts = SolverOptions(stability=False)
     force = 0.05
-    bf = frequency_response(system, f1, force, (455.0, 456.0), O, HARMONICS, NT, opts)
+    bf = mistuned_forced_response(mm, dev, 1, force, (455.0, 456.0), HARMONICS, NT)
     assert bf.completed and bf.status.max() == 0, bf.message
+    assert bf.out_h1.shape[1] == N
     lin = np.abs(linear_blade_response(mm, dev, 1, bf.freq_hz, "stuck")) * force
     rel = np.abs(bf.out_h1 / lin - 1).max()
     assert rel < 1e-6, rel

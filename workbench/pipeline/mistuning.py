@@ -34,7 +34,9 @@ sectors' FE work. What it cannot hold: a mistuned shape outside the span of the
 tuned modes kept per ND (large or local mistuning, e.g. a cracked blade, needs
 more modes per ND or the mistuned sector's own modes).
 
-Linear limits (:func:`linear_blade_response`): ``"none"`` removes the dampers;
+With friction, :func:`mistuned_forced_response` follows the assembled disk by the
+ordinary harmonic balance (condensed onto every damper's contact DOFs), every blade an
+output. Linear limits (:func:`linear_blade_response`): ``"none"`` removes the dampers;
 ``"stuck"`` bonds every contact pair (springs ``kt, kt, kn`` in its frame);
 ``"free"`` keeps only the normal springs (the frictionless, fully slipping limit
 ``mu -> 0``). Damping: the tuned model's (modal ratio per ND block), not mistuned.
@@ -196,6 +198,42 @@ def mistuned_disk_system(
     K = np.array(system.K, dtype=float, copy=True)
     K[:n_s, :n_s] += dK
     return dataclasses.replace(system, K=K), f1, blade_outputs(mm, K.shape[0])
+
+
+def mistuned_forced_response(
+    mm: MistuningModel,
+    deviations,
+    eo: int,
+    force_n: float,
+    band_hz: tuple[float, float],
+    harmonics: tuple[int, ...] = (0, 1, 2, 3),
+    nt: int | None = None,
+    options=None,
+    label: str = "",
+):
+    """The friction-damped forced response of the mistuned disk: a
+    :class:`workbench.hbm.forced.branch.Branch` over ``band_hz`` whose outputs are the
+    ``N`` blades' response points (``blade_0`` ...), by the ordinary harmonic balance on
+    :func:`mistuned_disk_system` (condensed onto every damper's contact DOFs).
+
+    ``force_n``: the harmonic-1 force (N) on every blade, blade ``j`` lagging by
+    ``j 2 pi eo / N``. ``options``: :class:`SolverOptions` (Hill's stability off unless
+    asked for: it is the whole disk's, and costly).
+    """
+    from ..errors import check_range
+    from ..hbm.core.options import SolverOptions
+    from ..hbm.forced.response import frequency_response
+
+    force_n = check_range("force", force_n, 0.0, lo_open=True, unit="N")
+    lo, hi = (float(v) for v in band_hz)
+    check_range("band_hz[0]", lo, 0.0, lo_open=True, unit="Hz")
+    check_range("band_hz[1]", hi, lo, lo_open=True, unit="Hz")
+    opts = options or SolverOptions(stability=False)
+    system, f1, O = mistuned_disk_system(mm, deviations, eo)
+    names = tuple(f"blade_{j}" for j in range(mm.n_blades))
+    return frequency_response(
+        system, f1, force_n, (lo, hi), O, tuple(harmonics), nt, opts, names, label=label
+    )
 
 
 def linear_matrices(mm: MistuningModel, deviations, eo: int, damper: str = "none"):
