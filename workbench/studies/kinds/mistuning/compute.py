@@ -13,7 +13,7 @@ as the reference.
 A *task* is one (damper, EO, pattern or the tuned disk, configuration); a configuration is
 ``none`` (the dampers removed, linear), ``stuck`` (every contact pair bonded, linear) or one
 force of ``forces`` (the dampers in friction: the harmonic-balance sweep of the mistuned
-whole disk, :func:`workbench.pipeline.mistuning.mistuned_disk_system`). Each gives every
+whole disk, :func:`workbench.pipeline.mistuning.mistuned_forced_response`). Each gives every
 blade's peak response (its response point along the excitation direction) per newton of
 force and the frequency of that peak:
 
@@ -127,7 +127,7 @@ def band_of(f0: float, df: np.ndarray, linear: bool) -> tuple[float, float]:
 def solve_task(mm, eo: int, df: np.ndarray, config, spec: StudySpec) -> dict[str, Any]:
     """One task's record: every blade's peak per newton (m/N), its frequency (Hz), whether
     it is a lower bound; a friction task also keeps its curves (for the figures)."""
-    from ....pipeline.mistuning import blade_peaks, mistuned_disk_system
+    from ....pipeline.mistuning import blade_peaks
 
     t0 = time.perf_counter()
     delta = (1.0 + df) ** 2 - 1.0
@@ -141,19 +141,18 @@ def solve_task(mm, eo: int, df: np.ndarray, config, spec: StudySpec) -> dict[str
         rec.update(completed=True, message="linear", n_points=N_FREQ, lower=edge.tolist())
     else:
         from ....hbm.core.options import SolverOptions
-        from ....hbm.forced.response import frequency_response
+        from ....pipeline.mistuning import mistuned_forced_response
 
         band = band_of(f0["stuck"], df, False)
-        system, f1, O = mistuned_disk_system(mm, delta, eo)
         # every blade alike: no peak search for output 0 alone (each blade's top is refined
         # below); AFT samples a multiple of N, so the tuned disk's blades see the same samples
         opts = SolverOptions(stability=False, max_points=int(spec.max_points), refine_peak=False)
-        names = tuple(f"blade_{j + 1}" for j in range(mm.n_blades))
         harmonics = tuple(int(h) for h in spec.harmonics)
-        br = frequency_response(
-            system, f1, float(config), band, O, harmonics, aft_samples(spec, mm.n_blades), opts,
-            names, label=f"EO {eo} {float(config):g} N",
-        )  # fmt: skip
+        nt = aft_samples(spec, mm.n_blades)
+        label = f"EO {eo} {float(config):g} N"
+        br = mistuned_forced_response(
+            mm, delta, eo, float(config), band, harmonics, nt, opts, label
+        )
         fz = np.asarray(br.freq_hz, dtype=float)
         amp = np.asarray(br.out_h1, dtype=float)
         if amp.size:
