@@ -366,6 +366,11 @@ def write_outputs(spec, out: Path, tasks, pats, curves, summary: dict, timings: 
         f"({r['worst_peak_m_p95'] * 1e6:.3g} µm, 95th percentile); amplification factor "
         f"{r['af_p95']:.3f} (95th percentile; max {r['af_max']:.3f}) with it in friction, "
         f"{r['af_p95_without_damper']:.3f} (max {r['af_max_without_damper']:.3f}) without it"
+        + (
+            f" ({r['lower_bounds']} of its peaks are lower bounds: sweeps stopped early)"
+            if r["lower_bounds"]
+            else ""
+        )
         for r in answer
     ]
     summary["headline"] = head
