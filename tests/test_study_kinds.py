@@ -50,7 +50,15 @@ KIND = StudyKind(name="echo", description="writes its option back (a test kind)"
                  run=_run, options=EchoOptions, check=_check, order=90)
 '''
 
-BUILT_IN = ("comparison", "sweep", "fidelity", "robustness", "uncertainty", "bladed_disk")
+BUILT_IN = (
+    "comparison",
+    "sweep",
+    "fidelity",
+    "robustness",
+    "uncertainty",
+    "bladed_disk",
+    "mistuning",
+)
 
 
 def test_the_built_in_kinds_are_registered_in_order_with_their_options():
@@ -58,7 +66,7 @@ def test_the_built_in_kinds_are_registered_in_order_with_their_options():
     assert BY_NAME["kind"].choices == BUILT_IN
     # each kind's own options are study options, after the shared ones, in kind order
     own = [o.name for k in kinds.all_kinds() for o in k.declared]
-    assert {"tolerance", "levels-nt", "methods", "uq-samples"} <= set(own)
+    assert {"tolerance", "levels-nt", "methods", "uq-samples", "mistuning-std"} <= set(own)
     assert [o.name for o in OPTIONS][-len(own) :] == own
     # and they are checked in every study, whatever its kind (a typo is a typo)
     with pytest.raises(InputError, match="levels-harmonics"):

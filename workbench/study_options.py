@@ -429,9 +429,10 @@ def input_table(
     shows: tuple[str, ...] = SHOWN, own: tuple[Option, ...] = ()
 ) -> tuple[tuple[str, str], ...]:
     """The rows ``(option, unit)`` of a report's Inputs table, in order: the study's name
-    and kind, the shared options ``shows``, a kind's own options ``own``, then the options
+    and kind, the options ``shows`` (shared ones, or another kind's it reads: the mistuning
+    study's disk is the bladed-disk study's), a kind's own options ``own``, then the options
     of the model and of the solver (each option's ``role``)."""
-    head = [BY_NAME[n] for n in ("name", "kind", *shows)]
+    head = [BY_NAME.get(n) or _DECLARED[n] for n in ("name", "kind", *shows)]
     model = [o for o in OPTIONS if o.role == "model"]
     solver = [o for o in OPTIONS if o.role == "solve" and o.group not in ("cases", "band")]
     rows = dict.fromkeys((o.name, o.unit) for o in (*head, *own, *model, *solver))

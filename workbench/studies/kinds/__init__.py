@@ -45,8 +45,8 @@ class StudyKind:
     options: type | None = None  # the record of its own options
     check: Callable[[Any], None] | None = None
     order: int = 100  # place in the kind list (the built-in kinds first)
-    # the shared options its report's Inputs table lists before its own (then the model's
-    # and the solver's follow: workbench.study_options.input_table)
+    # the shared options (or another kind's it reads) its report's Inputs table lists before
+    # its own (then the model's and the solver's follow: workbench.study_options.input_table)
     shows: tuple[str, ...] = SHOWN
 
     @property
@@ -108,8 +108,8 @@ def kind_options() -> tuple[Option, ...]:
 
 
 def inputs_table(name: str) -> tuple[tuple[str, str], ...]:
-    """The rows ``(option, unit)`` of the Inputs table of a study of kind ``name``: its
-    shared options (``shows``), its own options, the model's and the solver's."""
+    """The rows ``(option, unit)`` of the Inputs table of a study of kind ``name``: the
+    options it shows (``shows``), its own options, the model's and the solver's."""
     kind = get(name)
     return input_table(kind.shows, kind.declared)
 

@@ -65,7 +65,7 @@ def study_eos(spec: StudySpec) -> list[int]:
     return list(dict.fromkeys(int(e) for e in eos))
 
 
-def _sectors(spec: StudySpec, out: Path, comm) -> dict[str, Any]:
+def disk_sectors(spec: StudySpec, out: Path, comm) -> dict[str, Any]:
     """Every damper's disk sector, built on rank 0 (gmsh is serial), loaded by the others."""
     import dolfinx  # noqa: F401 - collective PETSc initialisation before rank 0 builds
 
@@ -233,7 +233,7 @@ def run_bladed_disk(spec: StudySpec, out: str | Path, *, force: bool = False) ->
     harmonics = tuple(int(h) for h in spec.harmonics)
     cp = load_contact_params(**contact_args(spec.as_dict()))
     with stage(timings, "disk sectors (geometry)"):
-        recs = _sectors(spec, out, comm)
+        recs = disk_sectors(spec, out, comm)
     cache = out / "cache" / "bladed_disk"
     cache.mkdir(parents=True, exist_ok=True)
 
