@@ -148,3 +148,28 @@ def test_sector_epmc_jacobian_is_exact(disk):  # noqa: F811
     v[prob.N :] *= 1e-3
     fd = (prob.residual(y + 1e-3 * v, a)[0] - prob.residual(y - 1e-3 * v, a)[0]) / 2e-3
     assert np.abs(J @ v - fd).max() < 1e-6 * np.abs(fd).max()
+
+
+def test_upd_disk_backbone_writes_the_sector_backbone(tmp_path, upd):
+    """`upd disk --backbone --eo 1` on 6 blades: the backbone of the ND-1 travelling wave
+    starts at its stuck frequency, softens and is written with its CSV."""
+    import csv
+
+    from test_disk import coarse_geometry_file
+    from test_sector_hbm import COARSE
+
+    from workbench.hbm.nlmodes.record import NlModeBranch
+
+    geo = coarse_geometry_file(tmp_path, COARSE)
+    r = upd("disk", "--geometry", str(geo), "--damper", "cylinder", "--n-blades", "6",
+            "--families", "1", "--backbone", "--eo", "1", "--frf-modes", "6",
+            "--out", str(tmp_path / "out"), "--json")  # fmt: skip
+    assert r.code == 0, r.err
+    s = r.json["sector_backbone"]
+    assert "sector" not in r.json and s["eo"] == 1 and s["n_points"] > 10
+    f0, f1 = s["freq_hz"]
+    assert abs(f0 / s["stuck_hz"] - 1) < 1e-6 and f1 < 0.97 * f0
+    nm = NlModeBranch.load(s["files"]["h5"])
+    assert nm.n_points == s["n_points"] and nm.damping_ratio.max() == s["damping_ratio_max"]
+    with open(s["files"]["csv"]) as fh:
+        assert len(list(csv.reader(fh))) == s["n_points"] + 1
