@@ -468,7 +468,7 @@ class SectorBalance:
             if b["rows"] == (0,):
                 continue
             xb, mq, md, nq, h = x[b["sl"]], b["mq"], b["md"], b["nq"], b["h"]
-            w = h * omega
+            w = h * h * omega  # pi (h omega)^2 / omega per unit x^T C x: h^2 omega
             nd = b["nd"]
             if b["two"]:
                 w_visc += np.pi * w * xb[:mq] @ nd.C @ xb[:mq]
