@@ -173,6 +173,8 @@ def test_sector_harmonic_balance_equals_the_whole_disk(disk, eo):
     assert abs(f_pk / f_stuck - 1) < 0.01  # the resonance of the stuck ND
     # EO 0: the cylinders roll with the in-phase platforms and stick; else they slip at the top
     assert (br.status[i].max() >= 1) == (eo > 0)
+    # work balance per cycle (harmonic h's viscous work is pi h^2 w x^T C x)
+    assert br.energy_residual.max() < 1e-8
     t_sector = time.perf_counter() - t0
     system, f1, O = full_disk_system(model, eo)
     band = (0.999 * f_pk, 1.001 * f_pk)

@@ -69,6 +69,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="also the forced response of one sector under engine order --eo at --force "
         "(harmonic balance on the sector; sector_eo<EO>.png/.h5/.csv, docs/DISK_HBM.md)",
     )
+    parser.add_argument(
+        "--backbone",
+        action="store_true",
+        help="also the nonlinear mode (EPMC backbone) of the first family at the ND of --eo, "
+        "on one sector (sector_backbone_eo<EO>.h5/.csv, docs/DISK_HBM.md)",
+    )
     add_value(
         parser,
         "--eo",
@@ -163,10 +169,14 @@ def run(args: argparse.Namespace, ctx: Context) -> dict[str, Any]:
         "fan_hz_stuck": result["stuck"].round(3).tolist(),
         "fan_hz_free": result["free"].round(3).tolist(),
     }
-    if args.frf and comm.rank == 0:
-        from .disk_frf import sector_frf
+    if (args.frf or args.backbone) and comm.rank == 0:
+        from .disk_frf import sector_backbone_run, sector_frf, sector_model
 
-        summary["sector"] = sector_frf(args, ctx, rec, cp, out)
+        model = sector_model(args, ctx, rec, cp)
+        if args.frf:
+            summary["sector"] = sector_frf(args, ctx, rec, model)
+        if args.backbone:
+            summary["sector_backbone"] = sector_backbone_run(args, ctx, model)
     if comm.rank == 0:
 
         def write(folder):

@@ -364,3 +364,28 @@ def _direction(hb, h: int) -> str:
     if k == 0 or 2 * k == hb.model.n_blades:
         return "standing"
     return "forward" if hb.direction[h] > 0 else "backward"
+
+
+def sector_backbone(
+    model: SectorModel,
+    eo: int,
+    amplitude_range: tuple[float, float] | None = None,
+    relative_range: tuple[float, float] = (0.05, 300.0),
+    harmonics: tuple[int, ...] = (0, 1, 2, 3),
+    nt: int | None = None,
+    mode: int = 0,
+    **options,
+):
+    """The nonlinear mode (EPMC backbone) of the tuned disk's family ``mode`` (0: the first)
+    at engine order ``eo``'s ND, on one sector's unknowns: a
+    :class:`workbench.hbm.nlmodes.record.NlModeBranch` (amplitude: one sector's modal
+    amplitude, sqrt(kg) m; the whole disk's is ``sqrt(N)`` times larger). ``options``: those
+    of :func:`workbench.hbm.nlmodes.sector_epmc.sector_nonlinear_mode`."""
+    from ..hbm.core.fourier import default_nt
+    from ..hbm.nlmodes.sector_epmc import sector_nonlinear_mode
+
+    eo = check_engine_order(eo, model.n_blades)
+    h = tuple(harmonics)
+    return sector_nonlinear_mode(
+        model, eo, mode, amplitude_range, relative_range, h, nt or default_nt(h), **options
+    )

@@ -303,6 +303,26 @@ class SectorBalance:
             A += W.T @ (kc2[:, None] * W)
         return A
 
+    def block_operators(self, i: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(K, M, V)`` of block ``i`` (harmonic ``h``): its dynamic stiffness is
+        ``K - (h w)^2 M + h w V`` (``K`` with the stuck contact stiffness, ``V`` the
+        velocity operator of the viscous damping; the mean block has ``M = V = 0``)."""
+        b = self.blocks[i]
+        A0 = self._stiffness(b, 0.0)
+        if b["rows"] == (0,):
+            z = np.zeros_like(A0)
+            return A0, z, z.copy()
+        h = b["h"]
+        Ap, Am = self._stiffness(b, 1.0 / h), self._stiffness(b, -1.0 / h)
+        return A0, A0 - (Ap + Am) / 2, (Ap - Am) / 2
+
+    def contact(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, object]:
+        """``(U, G, dG/dU, aft)`` at unknowns x (N,): contact displacement harmonics
+        (nh, n3), ``G = f - K_c u`` (nh, n3; mean anchor included), its exact derivative
+        (nh n3, nh n3) and the AFT result."""
+        U, G, D, res = self._contact(np.asarray(x, dtype=float).ravel())
+        return U, G, self._dfull(D), res
+
     def stuck_frequencies(self, h: int = 1, n: int = 3) -> np.ndarray:
         """The ``n`` lowest frequencies (Hz) of harmonic ``h``'s block with every contact stuck
         and closed, undamped: the linear limit at ND ``k_h`` (each eigenvalue of the real
@@ -448,7 +468,7 @@ class SectorBalance:
             if b["rows"] == (0,):
                 continue
             xb, mq, md, nq, h = x[b["sl"]], b["mq"], b["md"], b["nq"], b["h"]
-            w = h * omega
+            w = h * h * omega  # pi (h omega)^2 / omega per unit x^T C x: h^2 omega
             nd = b["nd"]
             if b["two"]:
                 w_visc += np.pi * w * xb[:mq] @ nd.C @ xb[:mq]
