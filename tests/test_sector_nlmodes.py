@@ -12,6 +12,7 @@ checked only against its own linear limit.
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -173,3 +174,4 @@ def test_upd_disk_backbone_writes_the_sector_backbone(tmp_path, upd):
     assert nm.n_points == s["n_points"] and nm.damping_ratio.max() == s["damping_ratio_max"]
     with open(s["files"]["csv"]) as fh:
         assert len(list(csv.reader(fh))) == s["n_points"] + 1
+    assert os.path.getsize(s["files"]["png"]) > 10_000  # the backbone's four panels

@@ -6,7 +6,8 @@ the nodal diameters the harmonics of ``--eo`` live at, follows the response at
 unit; the engine order, ND and direction of each harmonic as attributes),
 ``sector_eo<EO>.csv`` and ``sector_eo<EO>.png`` (the receptance curve).
 ``upd disk --backbone``: the nonlinear mode of the first family at the ND of
-``--eo`` on the same sector model (``sector_backbone_eo<EO>.h5`` and ``.csv``).
+``--eo`` on the same sector model (``sector_backbone_eo<EO>.h5``, ``.csv`` and ``.png``: frequency,
+damping ratio, friction energy and contact status against the amplitude).
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ def sector_frf(args, ctx, rec, model) -> dict[str, Any]:
 
 def sector_backbone_run(args, ctx, model) -> dict[str, Any]:
     """The sector backbone at ``args.eo`` (the default amplitude range: 0.05..300 times the
-    first slip) written to ``sector_backbone_eo<EO>.h5`` and ``.csv``."""
+    first slip) written to ``sector_backbone_eo<EO>.h5``, ``.csv`` and ``.png``."""
     from ..log import stage
     from ..pipeline.sector import sector_backbone
 
@@ -91,10 +92,22 @@ def sector_backbone_run(args, ctx, model) -> dict[str, Any]:
         "time_s": nm.timings["total"],
     }
     stem = f"sector_backbone_eo{eo}"
-    summary["files"] = ctx.write(
-        lambda d: {
+
+    def write(d: Path) -> dict[str, str]:
+        from ..render.nlmode_figures import plot_backbones
+
+        png = plot_backbones(
+            [(str(args.damper), nm)],
+            d / f"{stem}.png",
+            unit_scale=1e3,
+            unit="mm",
+            title=f"{args.damper} damper: nonlinear mode at EO {eo} (one sector's unknowns)",
+        )
+        return {
             "h5": str(nm.save(d / f"{stem}.h5")),
             "csv": str(nm.to_csv(d / f"{stem}.csv", unit="m")),
+            "png": str(png),
         }
-    )
+
+    summary["files"] = ctx.write(write)
     return summary
