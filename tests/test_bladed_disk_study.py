@@ -26,6 +26,7 @@ contact-mesh-size = 8.0
 damper-mesh-size = 10.0
 contact-points = 3
 harmonics = [0, 1, 2, 3]
+damping = 0.005
 n-blades = 6
 eos = [1, 5]
 sector-modes = 4
@@ -83,7 +84,10 @@ def test_peaks_are_the_sector_forced_response(study):
     assert [(int(r["eo"]), r["direction"]) for r in rows] == [(1, "forward"), (5, "backward")]
     rec = DiskSector.load(out / "cache" / "disk" / "cylinder" / "disk.h5")
     cp = load_contact_params(geometry_file=spec.geometry)
-    model = build_sector_model(rec, cp, None, n_modes=4, n_damper_modes=3)
+    # the study's modal damping is its `damping` option
+    model = build_sector_model(
+        rec, cp, None, n_modes=4, n_damper_modes=3, zeta=float(spec.damping)
+    )
     opts = SolverOptions(dc_weight=DC_WEIGHT)
     for r in rows:
         br, _ = sector_forced_response(model, int(r["eo"]), 30.0, None, (0, 1, 2, 3), options=opts)

@@ -36,6 +36,7 @@ contact-mesh-size = 8.0
 damper-mesh-size = 10.0
 contact-points = 3
 harmonics = [0, 1]
+damping = 0.005
 n-blades = 6
 eos = [1]
 sector-modes = 4

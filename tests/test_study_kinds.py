@@ -131,3 +131,20 @@ def test_a_new_kind_package_is_found_without_other_edits(echo_dir, tmp_path):
         str(echo_dir), "study", "--kind", "echo", "--echo-words", "12", "--out", str(out)
     )
     assert bad.returncode == 2 and "echo-words" in bad.stderr and "9" in bad.stderr
+
+
+def test_a_kinds_inputs_table_leaves_out_what_it_does_not_read():
+    """The disk kinds reduce one sector with their own modes and contact points and run
+    Hill's method on worst peaks only (or not at all): their Inputs tables must not state
+    the rig's ``modes``, ``points-per-line``, ``rigid-damper`` or a ``stability`` they did
+    not use. Each ignored name is a real option (a typo would hide nothing), and the
+    comparison still lists them."""
+    names = {o.name for o in OPTIONS}
+    full = {r[0] for r in kinds.inputs_table("comparison")}
+    for kind in ("bladed_disk", "mistuning"):
+        k = kinds.get(kind)
+        assert k.ignores and set(k.ignores) <= names
+        rows = {r[0] for r in kinds.inputs_table(kind)}
+        assert not rows & set(k.ignores)
+        assert {"damping", "harmonics", "nt", "max-points"} <= rows  # these it reads
+    assert {"modes", "points-per-line", "rigid-damper", "stability"} <= full

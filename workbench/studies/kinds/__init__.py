@@ -48,6 +48,9 @@ class StudyKind:
     # the shared options (or another kind's it reads) its report's Inputs table lists before
     # its own (then the model's and the solver's follow: workbench.study_options.input_table)
     shows: tuple[str, ...] = SHOWN
+    # model and solver options the kind does not read: left out of its Inputs table, so the
+    # table states only what the run used (e.g. the rig's "modes" on a disk sector)
+    ignores: tuple[str, ...] = ()
 
     @property
     def declared(self) -> tuple[Option, ...]:
@@ -109,9 +112,10 @@ def kind_options() -> tuple[Option, ...]:
 
 def inputs_table(name: str) -> tuple[tuple[str, str], ...]:
     """The rows ``(option, unit)`` of the Inputs table of a study of kind ``name``: the
-    options it shows (``shows``), its own options, the model's and the solver's."""
+    options it shows (``shows``), its own options, the model's and the solver's but for
+    those it ignores (``ignores``)."""
     kind = get(name)
-    return input_table(kind.shows, kind.declared)
+    return tuple(r for r in input_table(kind.shows, kind.declared) if r[0] not in kind.ignores)
 
 
 def rediscover() -> tuple[str, ...]:

@@ -43,7 +43,6 @@ from .outputs import nd_and_direction, write_outputs
 
 log = logging.getLogger(__name__)
 
-ZETA = 0.005  # modal damping ratio of the bladed sector's reduced modes (sector.py's default)
 RECORD_VERSION = 2  # 2: a case keeps its peak's unknowns and every point's contact status
 # The mean (harmonic-0) unknowns count in the continuation's arc length. At EO 0 the
 # damper's mean position drifts at the slip onset while the harmonics and the frequency
@@ -121,8 +120,10 @@ def case_key(rec, cp, spec: StudySpec, eo: int, force_n: float) -> str:
             "contact": repr(cp),
             "sector_modes": int(spec.bladed_disk.sector_modes),
             "damper_modes": int(spec.bladed_disk.damper_modes),
-            "zeta": ZETA,
+            "zeta": float(spec.damping),
             "harmonics": [int(h) for h in spec.harmonics],
+            "nt": None if spec.nt is None else int(spec.nt),
+            "max_points": int(spec.max_points),
             "eo": int(eo),
             "force_n": float(force_n),
             "code": solver_code_version(),
@@ -132,14 +133,17 @@ def case_key(rec, cp, spec: StudySpec, eo: int, force_n: float) -> str:
     )
 
 
-def solve_case(model, eo: int, force_n: float, harmonics: tuple[int, ...]) -> dict[str, Any]:
-    """One case's record: the sector's forced response at ``eo`` and ``force_n`` and its peak."""
+def solve_case(
+    model, eo: int, force_n: float, harmonics: tuple[int, ...], nt=None, max_points: int = 400
+) -> dict[str, Any]:
+    """One case's record: the sector's forced response at ``eo`` and ``force_n`` and its peak
+    (``nt`` AFT samples, None: the solver's default; at most ``max_points`` points)."""
     from ....hbm.core.options import SolverOptions
     from ....pipeline.sector import sector_forced_response
 
     t0 = time.perf_counter()
-    opts = SolverOptions(dc_weight=DC_WEIGHT)
-    br, info = sector_forced_response(model, eo, force_n, None, harmonics, options=opts)
+    opts = SolverOptions(dc_weight=DC_WEIGHT, max_points=int(max_points))
+    br, info = sector_forced_response(model, eo, force_n, None, harmonics, nt, options=opts)
     from ....contact.law import STATUS_NAMES
 
     amp = np.asarray(br.out_amp[:, 0], dtype=float)
@@ -277,9 +281,9 @@ def run_bladed_disk(spec: StudySpec, out: str | Path, *, force: bool = False) ->
                 None,
                 n_modes=int(spec.bladed_disk.sector_modes),
                 n_damper_modes=int(spec.bladed_disk.damper_modes),
-                zeta=ZETA,
+                zeta=float(spec.damping),
             )
-        rec = {"damper": d, **solve_case(models[d], e, f, harmonics)}
+        rec = {"damper": d, **solve_case(models[d], e, f, harmonics, spec.nt, spec.max_points)}
         write_json(cache / f"{keys[todo[k]]}.json", rec)
         if not bars_enabled():
             log.info(
@@ -361,6 +365,7 @@ def _post(spec, out, recs, cp, plan, keys, cases, worst, models, comm, force) ->
     from .post import damper_post, post_key
 
     cache = out / "cache" / "bladed_disk"
+    zeta = float(spec.damping)
     f_max = max(float(f) for f in spec.forces)
     at = {(d, e, f): i for i, (d, e, f) in enumerate(plan)}
     picks, pkeys = {}, {}
@@ -369,7 +374,7 @@ def _post(spec, out, recs, cp, plan, keys, cases, worst, models, comm, force) ->
         i = None if w is None else at[(d, w["worst_eo"], f_max)]
         picks[d] = i
         pkeys[d] = post_key(
-            keys[i] if i is not None else "", recs[d].digest, cp, spec, ZETA, RECORD_VERSION
+            keys[i] if i is not None else "", recs[d].digest, cp, spec, zeta, RECORD_VERSION
         )
     todo = [d for d in spec.dampers if force or not (cache / f"post_{pkeys[d]}.json").is_file()]
 
@@ -382,10 +387,10 @@ def _post(spec, out, recs, cp, plan, keys, cases, worst, models, comm, force) ->
                 None,
                 n_modes=int(spec.bladed_disk.sector_modes),
                 n_damper_modes=int(spec.bladed_disk.damper_modes),
-                zeta=ZETA,
+                zeta=zeta,
             )
         i = picks[d]
-        res = damper_post(models[d], recs[d], None if i is None else cases[i], spec, out, ZETA)
+        res = damper_post(models[d], recs[d], None if i is None else cases[i], spec, out, zeta)
         write_json(cache / f"post_{pkeys[d]}.json", res)
         log.info("%s: screen and worst-peak field (%.1f s)", d, res["wall_s"])
         return {}

@@ -57,7 +57,7 @@ from ....io import code_version, digest, write_json
 from ...engine.plan import solver_code_version
 from ...engine.schedule import run_tasks, schedule_efficiency, study_comm
 from ...engine.spec import StudySpec
-from ..bladed_disk.compute import ZETA, disk_sectors, study_eos
+from ..bladed_disk.compute import disk_sectors, study_eos
 from ..bladed_disk.outputs import nd_and_direction
 from .patterns import Patterns, study_patterns
 from .write import TUNED, amplification, config_key, write_outputs
@@ -92,7 +92,7 @@ def task_key(rec, cp, spec: StudySpec, eo: int, delta: np.ndarray, config, code:
             "contact": repr(cp),
             "sector_modes": int(spec.bladed_disk.sector_modes),
             "damper_modes": int(spec.bladed_disk.damper_modes),
-            "zeta": ZETA,
+            "zeta": float(spec.damping),
             "eo": int(eo),
             "deviations": [float(v) for v in delta],
             "config": config_key(config),
@@ -286,7 +286,7 @@ def run_mistuning(spec: StudySpec, out: str | Path, *, force: bool = False) -> d
                 cp,
                 int(spec.bladed_disk.sector_modes),
                 int(spec.bladed_disk.damper_modes),
-                ZETA,
+                float(spec.damping),
             )
         return models[d]
 
