@@ -85,9 +85,7 @@ def test_peaks_are_the_sector_forced_response(study):
     rec = DiskSector.load(out / "cache" / "disk" / "cylinder" / "disk.h5")
     cp = load_contact_params(geometry_file=spec.geometry)
     # the study's modal damping is its `damping` option
-    model = build_sector_model(
-        rec, cp, None, n_modes=4, n_damper_modes=3, zeta=float(spec.damping)
-    )
+    model = build_sector_model(rec, cp, None, n_modes=4, n_damper_modes=3, zeta=float(spec.damping))
     opts = SolverOptions(dc_weight=DC_WEIGHT)
     for r in rows:
         br, _ = sector_forced_response(model, int(r["eo"]), 30.0, None, (0, 1, 2, 3), options=opts)
