@@ -31,7 +31,13 @@ import scipy.sparse as sp
 
 from ..contact import ContactElements
 from ..errors import InputError
-from ..hbm.core.sector import NdBlock, SectorModel, check_engine_order, nd_of_harmonic
+from ..hbm.core.sector import (
+    NdBlock,
+    SectorModel,
+    check_engine_order,
+    nd_of_harmonic,
+    wave_of,
+)
 from ..hbm.core.system import System, modal_damping
 
 
@@ -350,20 +356,13 @@ def sector_forced_response(
         "n_blades": model.n_blades,
         "eo": eo,
         "nd_of_harmonic": {str(h): hb.nd_of_harmonic[h] for h in fourier.harmonics},
-        "direction_of_harmonic": {str(h): _direction(hb, h) for h in fourier.harmonics},
+        "direction_of_harmonic": {
+            str(h): wave_of(h, eo, model.n_blades)[1] for h in fourier.harmonics
+        },
         "stuck_hz": hb.stuck_frequencies(1, 3).tolist(),
         "stability": "not computed (one sector's Hill matrix only sees its own travelling wave)",
     }
     return br, info
-
-
-def _direction(hb, h: int) -> str:
-    """How harmonic ``h``'s wave travels: "standing" at ND 0 and N/2 (a real field), else
-    "forward" (``k_h = h EO mod N <= N/2``) or "backward" (its ND is ``N - k_h``)."""
-    k = hb.nd_of_harmonic[h]
-    if k == 0 or 2 * k == hb.model.n_blades:
-        return "standing"
-    return "forward" if hb.direction[h] > 0 else "backward"
 
 
 def sector_backbone(

@@ -117,6 +117,16 @@ def nd_of_harmonic(h: int, eo: int, n_blades: int) -> tuple[int, int, int]:
     return kh, n_blades - kh, -1
 
 
+def wave_of(h: int, eo: int, n_blades: int) -> tuple[int, str]:
+    """``(ND, how its wave travels)`` of harmonic ``h`` under engine order ``eo``:
+    "standing" at ND 0 and N/2 (a real field), else "forward" (``k_h = h EO mod N <= N/2``)
+    or "backward" (its ND is ``N - k_h``)."""
+    _, k, sigma = nd_of_harmonic(h, eo, n_blades)
+    if k == 0 or 2 * k == n_blades:
+        return k, "standing"
+    return k, "forward" if sigma > 0 else "backward"
+
+
 def check_engine_order(eo: object, n_blades: int) -> int:
     """``eo`` as an int >= 0 (one-line error naming ``eo`` otherwise); N >= 2 checked too."""
     if isinstance(n_blades, bool) or not isinstance(n_blades, int | np.integer) or n_blades < 2:

@@ -39,7 +39,7 @@ from ....io import digest, write_json
 from ...engine.plan import solver_code_version
 from ...engine.schedule import run_tasks, study_comm
 from ...engine.spec import StudySpec
-from .outputs import nd_and_direction, write_outputs
+from .outputs import eo_nd, write_outputs
 
 log = logging.getLogger(__name__)
 
@@ -325,10 +325,7 @@ def run_bladed_disk(spec: StudySpec, out: str | Path, *, force: bool = False) ->
         "ranks": size,
         "n_blades": n_b,
         "eos": eos,
-        "eo_nd": {
-            str(e): dict(zip(("nd", "direction"), nd_and_direction(e, n_b), strict=True))
-            for e in eos
-        },
+        "eo_nd": eo_nd(eos, n_b),
         "n_cases": len(plan),
         "n_computed": len(todo),
         "n_reused": len(plan) - len(todo),

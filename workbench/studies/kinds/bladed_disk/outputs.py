@@ -5,9 +5,11 @@ worst-peak fields of ``compute.py``."""
 from __future__ import annotations
 
 import logging
+from typing import Any
 
 import numpy as np
 
+from ....hbm.core.sector import wave_of
 from ....io import write_json
 from ....io.csv_rows import write_rows_csv
 from ...engine.outputs import write_manifest_and_report
@@ -16,13 +18,16 @@ log = logging.getLogger(__name__)
 
 
 def nd_and_direction(eo: int, n_blades: int) -> tuple[int, str]:
-    """The ND the harmonic-1 excitation of ``eo`` lives at and its wave's direction:
-    "standing" (ND 0 or N/2), "forward" (``eo mod N <= N/2``) or "backward"."""
-    k = eo % n_blades
-    nd = min(k, n_blades - k)
-    if nd == 0 or 2 * nd == n_blades:
-        return nd, "standing"
-    return nd, "forward" if k <= n_blades // 2 else "backward"
+    """The ND the harmonic-1 excitation of ``eo`` lives at and its wave's direction
+    (:func:`workbench.hbm.core.sector.wave_of`)."""
+    return wave_of(1, eo, n_blades)
+
+
+def eo_nd(eos: list[int], n_blades: int) -> dict[str, dict[str, Any]]:
+    """The summaries' ``eo_nd``: per EO its harmonic-1 ND and the wave's direction."""
+    return {
+        str(e): dict(zip(("nd", "direction"), wave_of(1, e, n_blades), strict=True)) for e in eos
+    }
 
 
 def write_outputs(spec, out, cases, worst, best, fans, eos, forces, summary, timings) -> None:

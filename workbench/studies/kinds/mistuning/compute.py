@@ -58,7 +58,7 @@ from ...engine.plan import solver_code_version
 from ...engine.schedule import run_tasks, schedule_efficiency, study_comm
 from ...engine.spec import StudySpec
 from ..bladed_disk.compute import disk_sectors, study_eos
-from ..bladed_disk.outputs import nd_and_direction
+from ..bladed_disk.outputs import eo_nd, nd_and_direction
 from .patterns import Patterns, study_patterns
 from .write import TUNED, amplification, config_key, write_outputs
 
@@ -330,10 +330,7 @@ def run_mistuning(spec: StudySpec, out: str | Path, *, force: bool = False) -> d
             "ranks": size,
             "n_blades": n_b,
             "eos": eos,
-            "eo_nd": {
-                str(e): dict(zip(("nd", "direction"), nd_and_direction(e, n_b), strict=True))
-                for e in eos
-            },
+            "eo_nd": eo_nd(eos, n_b),
             "n_patterns": pats.n_patterns,
             "std_percent": pats.std_percent,
             "sampling": pats.sampling,
