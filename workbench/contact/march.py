@@ -12,6 +12,21 @@ rule through every sample of every period marched,
 
     df_j/dU = Fu E_j + Fs ds_{j-1}/dU,   ds_j/dU = Su E_j + Ss ds_{j-1}/dU.
 
+Where the periodic state is not unique (a stuck element can carry any
+locked-in force its slip limit admits over the whole period), the march's
+start picks it. From rest, the decoupled law (and any law whose tangential
+axes are independent one-dimensional Jenkins elements) reaches, per axis,
+the admissible locked-in force nearest to zero: exactly the state that a
+vibration growing slowly from the preload state reaches (a growth over any
+number of periods changes nothing, to round-off, and the state does not
+depend on which sample starts the period: ``tests/test_march_history.py``).
+A law whose state does depend on the start (the circular law: a slip in
+one direction leaves the other free) declares ``GROWTH_PERIODS``: the
+march first grows the motion from rest, sample ``j`` of growth period
+``p`` scaled by ``(p nt + j + 1) / (GROWTH_PERIODS nt)``, then marches the
+periodic motion until it repeats. The derivative chains through the growth
+too (its samples are ``r E_j U``).
+
 The march is compiled once per law (:func:`specialise`: the law's ``step``
 is a global of its own copy of the kernel, cached on disk by numba under
 the name ``_march_<law>``).
@@ -35,20 +50,26 @@ MAX_PERIODS = 200
 _warned: set[str] = set()
 
 
-def specialise(py_func, law: Law, prefix: str):
+def specialise(py_func, law: Law, prefix: str, growth: int | None = None):
     """A numba-compiled copy of ``py_func`` whose global ``step`` is ``law.step``.
 
-    Each law gets its own function object named ``<prefix>_<law>`` (so numba
-    caches one compiled kernel per law on disk); ``py_func`` refers to the
-    law only through the global name ``step``. Memoised per (function, law).
+    Each law gets its own function object; ``py_func`` refers to the
+    law only through the global names ``step`` and ``growth`` (the law's
+    growth periods, or ``growth`` when given), named ``<prefix>_<law>_g<growth>``
+    (so numba caches one compiled kernel per law and growth on disk).
+    Memoised per (function, law, growth).
     """
-    key = (py_func.__qualname__, law.name)
+    own = law.growth_periods if growth is None else int(growth)
+    key = (py_func.__qualname__, law.name, own)
     if key not in _kernels:
         from numba import njit
 
         g = dict(py_func.__globals__)
         g["step"] = law.step
-        name = f"{prefix}_{law.name}"
+        g["growth"] = own
+        # the growth in the name: numba's disk cache takes globals as constants and would
+        # not notice a law's GROWTH_PERIODS changing
+        name = f"{prefix}_{law.name}_g{own}"
         fn = types.FunctionType(py_func.__code__, g, name, py_func.__defaults__)
         fn.__qualname__ = name
         _kernels[key] = njit(cache=True)(fn)
@@ -57,6 +78,7 @@ def specialise(py_func, law: Law, prefix: str):
 
 _kernels: dict = {}
 step = None  # the law's step: bound per law by specialise()
+growth = 0  # the law's growth periods (Law.growth_periods): bound per law by specialise()
 
 
 def _march_py(
@@ -77,6 +99,7 @@ def _march_py(
     Su = np.zeros((ns, 3))
     Ss = np.zeros((ns, ns))
     fj = np.zeros(3)
+    uj = np.zeros(3)
     dfb = np.zeros((3, nt, m)) if want_jac else np.zeros((3, 1, m))
     flags = np.zeros(nt, dtype=np.int64)
     for e in range(n_el):
@@ -97,12 +120,18 @@ def _march_py(
         lpe = lp[e]  # the element's values of the law's own parameters
         p = 0
         same = False
-        while p < max_periods:
+        # the law's growth periods first (r < 1: the motion grows from rest, nothing is
+        # recorded), then the periodic march (r = 1) until the state repeats
+        while p < growth + max_periods:
+            growing = p < growth
             s_start[:] = s
             scale[:] = 0.0
             for j in range(nt):
+                r = (p * nt + j + 1) / (growth * nt) if growing else 1.0
+                for b in range(3):
+                    uj[b] = r * u[e, j, b]
                 flags[j] = step(
-                    u[e, j], s, mu[e], kt1[e], kt2[e], kn[e], n0[e], lpe, want_jac,
+                    uj, s, mu[e], kt1[e], kt2[e], kn[e], n0[e], lpe, want_jac,
                     fj, s_new, Fu, Fs, Su, Ss,
                 )  # fmt: skip
                 f[e, j, 0] = fj[0]
@@ -126,7 +155,7 @@ def _march_py(
                             fab = Fu[a, b]
                             if fab != 0.0 and active[e, b]:
                                 for h in range(nh):
-                                    dfb[a, j, b * nh + h] += fab * E[j, h]
+                                    dfb[a, j, b * nh + h] += fab * r * E[j, h]
                     for a in range(ns):
                         for c in range(ulo, uhi):
                             ds_new[a, c] = 0.0
@@ -139,7 +168,7 @@ def _march_py(
                             sab = Su[a, b]
                             if sab != 0.0 and active[e, b]:
                                 for h in range(nh):
-                                    ds_new[a, b * nh + h] += sab * E[j, h]
+                                    ds_new[a, b * nh + h] += sab * r * E[j, h]
                     for a in range(ns):
                         for c in range(ulo, uhi):
                             ds[a, c] = ds_new[a, c]
@@ -148,14 +177,14 @@ def _march_py(
                     if abs(s[k]) > scale[k]:
                         scale[k] = abs(s[k])
             p += 1
-            if p >= 2:
+            if p - growth >= 2:
                 same = True
                 for k in range(ns):
                     if abs(s[k] - s_start[k]) > tol * scale[k]:
                         same = False
                 if same:
                     break
-        periods[e] = p
+        periods[e] = p - growth
         converged[e] = same
         ns_ = 0
         nsep = 0
@@ -221,8 +250,12 @@ def march(
     max_periods: int = MAX_PERIODS,
     active: np.ndarray | None = None,
     lp: np.ndarray | None = None,
+    growth: int | None = None,
 ) -> dict[str, np.ndarray]:
     """March ``law`` over periods of samples ``u`` (n_el, nt, 3) in metres until it repeats.
+
+    ``growth``: periods over which the motion first grows from rest (default:
+    the law's ``growth_periods``; see the module docstring).
 
     ``lp`` (n_el, n_own): each element's values of the law's own parameters
     (:func:`law_param_array`; default: their declared defaults).
@@ -260,7 +293,9 @@ def march(
         if active is None
         else np.ascontiguousarray(active, dtype=np.bool_)
     )
-    specialise(_march_py, lw, "_march")(
+    if growth is not None and int(growth) < 0:
+        raise InputError("growth", growth, "an integer >= 0 (periods of growth from rest)")
+    specialise(_march_py, lw, "_march", growth)(
         lw.n_state, u,
         np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(P, dtype=float),
         *arrs, act, bool(want_jac), float(tol), int(max_periods),
