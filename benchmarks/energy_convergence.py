@@ -328,7 +328,7 @@ def add_flexibility(runs: dict) -> dict:
 # points per line with the contact mesh size scaled so that n h stays the main job's
 # 23 x 1.5 mm: the node's compliance against its spring (k g ~ 1 / (n h)) is then held,
 # and only the quadrature of the line changes
-SAME_KG = [(17, 2.03), (23, 1.5), (33, 1.05)]
+SAME_KG = [(12, 2.875), (17, 2.03), (23, 1.5), (33, 1.05), (45, 0.767)]
 
 
 def same_kg(runs: dict) -> dict:
