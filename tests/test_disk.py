@@ -158,6 +158,7 @@ def test_craig_bampton_per_nodal_diameter_converges_from_above(clamped):
             "disk.n_blades",
         ),  # the damper, low in the groove, would touch the radial blade leaning in
         (36, {"rig": {"platform": {"overhang_mm": 36.0}}}, "rig.platform.overhang_mm"),
+        (12, {"rig": {"mesh": {"pad_mm": 2.0}}}, "rig.mesh.pad_mm"),  # pads: rig only
     ],
 )
 def test_bad_disk_input_names_the_parameter(n, over, param):

@@ -240,6 +240,14 @@ def _craig_bampton(geom, body, n_modes, inputs, dig, code, comm, timings) -> Red
     pts, sets, labels = interface_points(geom, body)
     with stage(timings, "locate"):
         nodes = locate_nodes(eb, pts, labels=labels)
+    pad = float(geom.params["rig"]["mesh"].get("pad_mm", 0.0)) * 1e-3
+    if pad > 0:
+        from .pads import tie_pads
+
+        with stage(timings, "pads"):
+            counts = tie_pads(eb, nodes, geom.contact, pad)
+        info(log, comm, "%s: %d nodes tied to the contact points' pads (%.1f per pair)",
+             body, counts["pad_nodes"], counts["pad_nodes_per_pair"])  # fmt: skip
     cb = craig_bampton(eb, nodes, n_modes, timings=timings)
     nb = cb.n_b
     T = np.zeros((nb, cb.K.shape[0]))

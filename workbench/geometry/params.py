@@ -135,6 +135,12 @@ class MeshSizes:
     contact_size_mm: float = param(
         1.5, "element size at the contact points (rig and damper), mm", lo=0.0, lo_open=True
     )
+    pad_mm: float = param(
+        0.0,
+        "width of the pad tied to each contact point (workbench/fe/pads.py); 0: the node "
+        "alone, mm",
+        lo=0.0,
+    )
     refine_distance_mm: float = param(
         12.0,
         "distance from the contact points over which the size grows back, mm",

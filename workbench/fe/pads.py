@@ -1,0 +1,151 @@
+"""Contact pads: tie the nodes around each contact point to it, so a pair loads a patch.
+
+A contact pair acts on one mesh node. Refined around that node, a 3-D
+elastic body gives under it without limit (a point load's displacement
+grows as 1/h; a line of points acts as a line load, log(1/h)), so the
+contact's effective stiffness, its frequencies and its friction energy
+follow the mesh (docs/notes/energy_convergence.md). A pad of a fixed size
+removes that: the nodes of the body inside the pad and the contact node
+move as one rigid body (a penalty on their motion that is not rigid, added
+to ``K`` before the reduction), so the pair loads a patch of fixed size
+whose compliance converges as the mesh resolves it.
+
+The pad of a pair, in its frame (t1, t2, n) at its point p:
+
+* line contacts: along the line, the pair's tributary length times
+  ``FILL`` (so neighbouring pads never touch); across the line and in
+  depth, within ``width / 2`` of the line;
+* face contacts: a square of the pair's tributary area times ``FILL``
+  (side ``FILL sqrt(area)``) in the face; in depth, within ``width / 2``.
+
+The pad translates and rotates freely (a body's rigid motions keep zero
+stiffness). ``width = 0``: no pad (the point alone, the default).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+FILL = 0.9  # the share of the tributary length (area side) a pad covers along the contact
+ALPHA = 1e5  # the tie's stiffness, relative to the body's median diagonal stiffness
+
+
+def pad_members(
+    coords: np.ndarray,
+    points: np.ndarray,
+    frames: np.ndarray,
+    weight: np.ndarray,
+    kind: str,
+    width: float,
+) -> list[np.ndarray]:
+    """Per contact point, the indices into ``coords`` (n, 3) of the nodes in its pad.
+
+    ``points`` (m, 3), ``frames`` (m, 3, 3) rows t1, t2, n, ``weight`` (m,) tributary
+    length (m, lines) or area (m^2, faces), ``width`` m. The contact node itself is
+    excluded (the caller ties the others to it); lines run along the principal axis of
+    the points of each line (t1 and t2 need not follow it).
+    """
+    from scipy.spatial import cKDTree
+
+    out: list[np.ndarray] = []
+    if width <= 0 or len(coords) == 0:
+        return [np.zeros(0, dtype=np.int64) for _ in range(len(points))]
+    tree = cKDTree(coords)
+    for i, p in enumerate(points):
+        n = frames[i, 2] / np.linalg.norm(frames[i, 2])
+        if kind == "line":
+            half_len = 0.5 * FILL * float(weight[i])
+            d = _line_direction(points, frames, i)
+            reach = np.hypot(half_len, 0.5 * width)
+            cand = np.asarray(tree.query_ball_point(p, reach), dtype=np.int64)
+            r = coords[cand] - p
+            along = r @ d
+            across = np.linalg.norm(r - np.outer(along, d), axis=1)
+            keep = (np.abs(along) <= half_len) & (across <= 0.5 * width)
+        else:
+            half = 0.5 * FILL * float(np.sqrt(weight[i]))
+            t1 = frames[i, 0] / np.linalg.norm(frames[i, 0])
+            t2 = np.cross(n, t1)
+            reach = float(np.sqrt(2 * half**2 + (0.5 * width) ** 2))
+            cand = np.asarray(tree.query_ball_point(p, reach), dtype=np.int64)
+            r = coords[cand] - p
+            keep = (
+                (np.abs(r @ t1) <= half) & (np.abs(r @ t2) <= half) & (np.abs(r @ n) <= 0.5 * width)
+            )
+        sel = cand[keep]
+        dist = np.linalg.norm(coords[sel] - p, axis=1)
+        out.append(np.sort(sel[dist > 1e-12]))
+    return out
+
+
+def _line_direction(points: np.ndarray, frames: np.ndarray, i: int) -> np.ndarray:
+    """The unit direction of the contact line through point i: the principal axis of the
+    points lying on a common line with it (same normal, within 1e-6 of that line)."""
+    n = frames[i, 2] / np.linalg.norm(frames[i, 2])
+    same = np.flatnonzero(np.abs(frames[:, 2] @ n - 1.0) < 1e-9)
+    pts = points[same]
+    if len(pts) < 2:
+        return frames[i, 0] / np.linalg.norm(frames[i, 0])
+    c = pts.mean(axis=0)
+    _, _, vt = np.linalg.svd(pts - c)
+    return vt[0]
+
+
+def rigid_penalty(r: np.ndarray) -> np.ndarray:
+    """(3k, 3k) ``I - R (R^T R)^-1 R^T``: the part of the k nodes' displacements that is not a
+    rigid motion of them (``r`` (k, 3): positions about any point). A pad tied with it moves
+    as a rigid body, free to translate and rotate, so it adds no stiffness to a body's own
+    rigid motions."""
+    k = len(r)
+    R = np.zeros((3 * k, 6))
+    for j, (x, y, z) in enumerate(r):
+        R[3 * j : 3 * j + 3, :3] = np.eye(3)
+        # u = theta x r
+        R[3 * j : 3 * j + 3, 3:] = [[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]]
+    Q, _ = np.linalg.qr(R)
+    return np.eye(3 * k) - Q @ Q.T
+
+
+def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
+    """Make each contact point's pad rigid in ``body.K`` (PETSc, assembled again).
+
+    ``nodes``: the located interface nodes (the first ``contact.n_pairs`` are the contact
+    points, in ContactSet order). The pad's nodes (the contact node and those of
+    :func:`pad_members`) get the penalty ``alpha`` :func:`rigid_penalty`: they move as one
+    rigid body. Each rank finds the pad nodes it owns; the lowest rank adds every pad's
+    block (PETSc's assembly sends the rows it does not own). Returns counts.
+    """
+    from petsc4py import PETSc
+
+    comm = body.comm
+    K = body.K
+    coords = body.owned_node_coords()
+    m = contact.n_pairs
+    members = pad_members(
+        coords, contact.points, contact.frames, contact.weight, contact.kind, width_m
+    )
+    offset = body.V.dofmap.index_map.local_range[0]
+    mine = [(offset + mem, coords[mem]) for mem in members]
+    every = comm.allgather(mine)
+    diag = K.getDiagonal().getArray()
+    pos = diag[diag > 1.0]
+    med = float(np.median(pos)) if len(pos) else 1.0
+    alpha = ALPHA * max(comm.allgather(med))
+    K.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+    centers = nodes.global_dofs[:m] // 3
+    n_tied = 0
+    for i in range(m):
+        g = np.concatenate([[centers[i, 0]]] + [e[i][0] for e in every]).astype(np.int64)
+        x = np.vstack([contact.points[i][None, :]] + [e[i][1] for e in every])
+        keep = np.concatenate([[True], g[1:] != g[0]])
+        g, x = g[keep], x[keep]
+        n_tied += len(g) - 1
+        if comm.rank != 0 or len(g) < 2:
+            continue
+        rows = (3 * g[:, None] + np.arange(3)[None, :]).ravel().astype(PETSc.IntType)
+        K.setValues(rows, rows, alpha * rigid_penalty(x - x[0]), addv=PETSc.InsertMode.ADD_VALUES)
+    K.assemble()
+    return {"pad_nodes": n_tied, "pad_alpha": alpha, "pad_nodes_per_pair": n_tied / max(m, 1)}
+
+
+__all__ = ["ALPHA", "FILL", "pad_members", "rigid_penalty", "tie_pads"]
