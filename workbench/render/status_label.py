@@ -21,9 +21,10 @@ cycle, and once the slide at the centre passes the slip limit
   pointers to the note and FINDINGS.
 
 Only the cone's in-phase maps get a label: the mechanism was measured there.
-Out of phase the normal load at the line centre swings by more than half
-the preload, so the slide-to-limit ratio alone does not say whether the
-centre slips (the main job's cone at 9.6 N: ratio 1.27, centre stuck).
+Out of phase the normal load at the line centre swings by 47-97 % of the
+preload in the main job, so the slide-to-limit ratio alone does not say
+whether the centre slips (cone at 9.6 N: ratio 1.27, 9 of the 10 central
+pairs stuck).
 """
 
 from __future__ import annotations
@@ -47,12 +48,12 @@ FINDINGS = "docs/FINDINGS.md"
 PAPER_RIG_FILE = "paper_rig.toml"  # geometry/paper_rig.toml: the rig the reason was measured on
 # the section's sentence when a cone map carries the explanation
 EXPLAINED = (
-    "The cone's in-phase map carries the reason its line centres slip at the higher "
-    "forces while the paper's stay stuck with slipping ends. The reason was measured on "
-    "this paper-like rig at the main job's setting (studies/paper_rig.toml), not on other "
-    "rigs or dampers: the slide along each line against the slip limit mu N0/kt, "
-    f"computed for each panel from the case itself. Details: {NOTE} ('{NOTE_SECTION}') "
-    f"and {FINDINGS}."
+    "The cone's in-phase map carries the reason its line centres slip at the higher forces "
+    "while the paper's stay stuck with slipping ends, measured on this paper-like rig at the "
+    "main job's setting (studies/paper_rig.toml) and not claimed for other rigs or dampers. "
+    "Each panel's numbers (the slide at the line centres against the slip limit mu N0/kt, "
+    "the swing of the normal load) are computed from that case's own solution. "
+    f"Details: {NOTE} ('{NOTE_SECTION}') and {FINDINGS}."
 )
 
 
