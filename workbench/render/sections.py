@@ -82,6 +82,7 @@ from .section_builder import (
     _Section,
 )
 from .status_figures import plot_status_map, plot_status_shares
+from .status_label import EXPLAINED, cone_status_label
 from .sweep_sections import _sweep
 
 log = logging.getLogger(__name__)
@@ -230,6 +231,7 @@ def _status(b: _Builder, variant: str) -> None:
             "Then the share of each status at resonance against the force."
         ],
     )
+    explained = False  # the sentence on the cone's label, once
     for p in families(r):
         fam = family_name(p)
         cases = r.select(phase_deg=p, variant=variant)
@@ -243,13 +245,24 @@ def _status(b: _Builder, variant: str) -> None:
             ]
             if not own:
                 continue
+            label = cone_status_label(own, curve_set(r, d, p, variant))
+            if label is not None and label.footnote and not explained:
+                sec.text.append(EXPLAINED)
+                explained = True
             b.figure(
                 sec,
                 f"status_map_{_fam_slug(p)}_{slug(d)}",
                 f"{d} damper, {fam}: contact status of every pair vs frequency at "
                 f"{_forces_text([c.force_n for c in own])} (stuck, stick-slip, partial "
-                "separation, full separation); dashed black line: the resonance." + _failures(own),
-                lambda path, cs=own: plot_status_map(cs, path),
+                "separation, full separation); dashed black line: the resonance."
+                + (label.caption if label else "")
+                + _failures(own),
+                lambda path, cs=own, lb=label: plot_status_map(
+                    cs,
+                    path,
+                    panel_notes=lb.panel_notes if lb else None,
+                    footnote=lb.footnote if lb else None,
+                ),
             )
         b.figure(
             sec,

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import InputError
 from ..post.results import STATUS_NAMES, CaseResult
 from ..post.tables import status_share_curves
 from .common import pyplot, save_figure, styled
@@ -184,15 +185,24 @@ def draw_status_panel(
 
 @styled
 def plot_status_map(
-    cases: Sequence[CaseResult], path: str | Path, *, title: str | None = None
+    cases: Sequence[CaseResult],
+    path: str | Path,
+    *,
+    title: str | None = None,
+    panel_notes: Sequence[str] | None = None,
+    footnote: str | None = None,
 ) -> Path:
     """Contact status of every pair vs frequency for one damper and family (paper Fig. 12).
 
     One panel per case (e.g. 9.6 N and 30 N), pairs on y (side 0 first,
     then side 1 above the dashed line), frequency on x, colour the status;
     the dashed black line marks the resonance (the harmonic-1 peak).
+    ``panel_notes``: one line per case added under its panel title ("" for
+    none); ``footnote``: a paragraph under the legend (wrapped to the width).
     """
     cases = _one_set(cases, "cases")
+    if panel_notes is not None and len(panel_notes) != len(cases):
+        raise InputError("panel_notes", len(panel_notes), f"one per case ({len(cases)})")
     plt = pyplot()
     n = len(cases)
     windows = [status_zoom(c) for c in cases]
@@ -202,10 +212,17 @@ def plot_status_map(
         for w, s in zip(windows, spans, strict=True)
     )
     rows = 2 if zoom else 1
+    width, note = 3.9 * n + 0.6, None
+    if footnote:  # as the legend's title: the layout keeps it clear of the panels and the key
+        import textwrap
+
+        # about 0.5 em per character at 8.5 pt, across 95 % of the figure's width
+        note = textwrap.fill(footnote, int(0.95 * width * 72 / (0.5 * 8.5)))
+    extra_h = 0.0 if note is None else (note.count("\n") + 1) * 8.5 * 1.25 / 72
     fig, axes = plt.subplots(
         rows,
         n,
-        figsize=(3.9 * n + 0.6, 4.6 if rows == 1 else 7.6),
+        figsize=(width, (4.6 if rows == 1 else 7.6) + extra_h),
         sharey=True,
         layout="constrained",
         squeeze=False,
@@ -224,6 +241,8 @@ def plot_status_map(
                 if c.branch.n_points
                 else "\nbranch failed"
             )
+        if panel_notes is not None and panel_notes[k]:
+            head += "\n" + panel_notes[k]
         axes[0, k].set_title(head, fontsize=10)
         if zoom:
             w0, w1 = windows[k]
@@ -247,7 +266,12 @@ def plot_status_map(
         Line2D([], [], **_RESONANCE, label="resonance (harmonic-1 peak)"),
     ]
     fig.legend(
-        handles=status_legend_handles() + extra, loc="outside lower center", ncol=6, frameon=False
+        handles=status_legend_handles() + extra,
+        loc="outside lower center",
+        ncol=6,
+        frameon=False,
+        title=note,
+        title_fontsize=8.5,
     )
     c0 = cases[0]
     fig.suptitle(title or f"{c0.damper} damper, {c0.family}: contact status of every pair")
