@@ -356,20 +356,65 @@ def same_kg(runs: dict) -> dict:
 PAD_SIZES = [3.0, 1.5, 1.0, 0.75]
 
 
-def pads(runs: dict, width: float, cases: list[str], sizes: list[float]) -> dict:
-    """The contact-size ladder with pads of ``width`` mm (cached in ``runs``), printed."""
+# the rig's contact stiffness (geometry/paper_rig.toml), scaled by --pad-scale
+STIFFNESS = {
+    "cone": {"kt_line": 4.0e10, "kn_line": 4.9e10},
+    "wedge": {"kt_face": 7.5e11, "kn_face": 9.15e11},
+}
+
+
+def _pad_limits(case: str, rows: list) -> None:
+    """Richardson on a pad ladder: order, limit +- U and the main job's (1.5 mm) error."""
+    from workbench.post.extrapolation import richardson
+
+    rows = [(h, r) for h, r in rows if r]
+    for q, name in (("energy", "E"), ("amp", "A"), ("freq", "f")):
+        vals = [
+            r[f"{q}_v_" + ("mj" if q == "energy" else "mm" if q == "amp" else "hz")]
+            for _, r in rows
+        ]
+        est = richardson([h for h, _ in rows], vals)
+        base = dict(rows).get(BASE["contact-size"])
+        line = f"  {case} {name}: "
+        if est.asymptotic:
+            b = base[f"{q}_v_" + ("mj" if q == "energy" else "mm" if q == "amp" else "hz")]
+            err = 100 * (b / est.value - 1)
+            line += (
+                f"order {est.order:.2f}, limit {est.value:.4g} +- {est.uncertainty:.2g}, "
+                f"1.5 mm off by {err:+.2f} % (+- {100 * est.uncertainty / est.value:.2f} %)"
+            )
+        else:
+            line += f"not asymptotic ({est.reason})"
+        print(line)
+
+
+def pads(
+    runs: dict, width: float, cases: list[str], sizes: list[float], scale: float = 1.0
+) -> dict:
+    """The contact-size ladder with pads of ``width`` mm (cached in ``runs``), printed;
+    ``scale`` multiplies the contact stiffness (the calibration with pads)."""
+
+    def setting_of(h):
+        st = dict(BASE, **{"contact-size": h, "pad": width})
+        if scale != 1.0:
+            st["kscale"] = scale
+        return st
+
     for case in cases:
+        damper = CASES[case][0]
+        extra = {k: scale * v for k, v in STIFFNESS[damper].items()} if scale != 1.0 else None
         for h in sizes:
-            setting = dict(BASE, **{"contact-size": h, "pad": width})
+            setting = setting_of(h)
             k = _key(case, setting)
             if k not in runs:
                 print(f"run {k}", flush=True)
-                runs[k] = run_one(case, setting)
+                runs[k] = run_one(case, setting, extra)
                 save(runs)
-    print(f"\nContact size with {width:g} mm pads (E mJ / A mm / f Hz, k g_t)")
+    print(f"\nContact size with {width:g} mm pads, stiffness x {scale:g} (E mJ / A mm / f Hz)")
     for case in cases:
+        _pad_limits(case, [(h, runs.get(_key(case, setting_of(h)))) for h in sizes])
         for h in sizes:
-            r = runs.get(_key(case, dict(BASE, **{"contact-size": h, "pad": width})))
+            r = runs.get(_key(case, setting_of(h)))
             if r:
                 print(
                     f"| {case} | {h:g} | {r['energy_v_mj'] or r['energy_mj']:.2f} / "
@@ -389,6 +434,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--pattern", action="store_true", help="the cone's contact pattern variants")
     ap.add_argument("--pad", type=float, default=0.0, help="contact-size ladder with pads, mm")
     ap.add_argument("--pad-sizes", type=float, nargs="*", default=PAD_SIZES, help="mm")
+    ap.add_argument("--pad-scale", type=float, default=1.0, help="contact stiffness factor")
     a = ap.parse_args(argv)
     runs = load() if a.report else compute(a.only, a.cases)
     if a.pattern:
@@ -396,7 +442,7 @@ def main(argv: list[str] | None = None) -> int:
     if a.same_kg:
         runs = same_kg(runs)
     if a.pad:
-        runs = pads(runs, a.pad, a.cases, a.pad_sizes)
+        runs = pads(runs, a.pad, a.cases, a.pad_sizes, a.pad_scale)
         return 0
     if a.flex:
         runs = add_flexibility(runs)

@@ -119,3 +119,21 @@ def test_free_block_with_pads_keeps_six_rigid_modes(tmp_path):
 def test_no_pad_no_members(width):
     out = pad_members(np.zeros((4, 3)), np.zeros((1, 3)), np.eye(3)[None], np.ones(1), "line", width)
     assert len(out) == 1 and len(out[0]) == 0
+
+
+def test_pad_variant_of_the_paper_rig_keeps_in_step():
+    """geometry/paper_rig_pads.toml is geometry/paper_rig.toml with pads and the contact
+    stiffness scaled by the calibration its header states; nothing else differs."""
+    import tomllib
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1] / "geometry"
+    base = tomllib.loads((root / "paper_rig.toml").read_text())
+    pads = tomllib.loads((root / "paper_rig_pads.toml").read_text())
+    assert pads["rig"].pop("mesh") == {"pad_mm": 2.0}
+    cb, cp = base.pop("contact"), pads.pop("contact")
+    assert pads == base
+    for key, scale in (("kt_line_n_per_m2", 0.4509), ("kn_line_n_per_m2", 0.4509),
+                       ("kt_face_n_per_m3", 0.9253), ("kn_face_n_per_m3", 0.9253)):  # fmt: skip
+        assert cp.pop(key) == pytest.approx(scale * cb.pop(key), rel=1e-3)
+    assert cp == cb

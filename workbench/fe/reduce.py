@@ -42,6 +42,9 @@ _SOURCES = (
     "mesh.py",
     "solvers.py",
     "parallel.py",
+    "pads.py",
+    "block_eigen.py",  # the fixed-interface eigen solve (was missing from the key)
+    "modes.py",  # load_bodies
 )
 N_MODES_MAX = 500
 RIGID_RATIO = 1e-6  # six eigenvalues below this fraction of the first elastic one
@@ -240,7 +243,7 @@ def _craig_bampton(geom, body, n_modes, inputs, dig, code, comm, timings) -> Red
     pts, sets, labels = interface_points(geom, body)
     with stage(timings, "locate"):
         nodes = locate_nodes(eb, pts, labels=labels)
-    pad = float(geom.params["rig"]["mesh"].get("pad_mm", 0.0)) * 1e-3
+    pad = float(geom.params.get("rig", {}).get("mesh", {}).get("pad_mm", 0.0)) * 1e-3
     if pad > 0:
         from .pads import tie_pads
 
