@@ -77,6 +77,17 @@ def test_the_study_plans_the_main_job_and_the_three_cases(tmp_path):
     for st in ladders["points-per-line"]:
         for c, b in zip(comp.cases(st), base_cases, strict=True):
             assert (c.digest == b) == (c.damper == "wedge" or st is base)
+    # every planned geometry passes the layout's fit checks (no gmsh)
+    from workbench.geometry.layout import make_layout
+    from workbench.geometry.params import load_geometry_params
+    from workbench.pipeline import geometry_request
+
+    reqs = {repr(r): r for st in settings for r in map(geometry_request, comp.cases(st))}
+    # base, mesh, contact, points (cone), reference (cone: the wedge's is its contact 1 mm)
+    assert len(reqs) == 2 + 2 * 2 + 2 * 2 + 3 + 1
+    for r in reqs.values():
+        gp = load_geometry_params(r["damper"], r["geometry_file"], r["overrides"], r["size_mm"])
+        make_layout(gp)
     assert comp.not_applicable(ladders) == {
         ("points-per-line", "wedge 0 deg 9.6 N"),
         ("points-per-line", "wedge 0 deg 30 N"),
