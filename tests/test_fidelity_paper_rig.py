@@ -197,3 +197,20 @@ def test_the_limit_of_every_knob_is_flagged_where_the_contact_ladder_diverges():
     assert c["value"] == pytest.approx(DIVERGING[1.0] - 40.0 / 23.0, rel=1e-9)
     assert w["asymptotic"] and w["value"] == pytest.approx(64.0, rel=1e-9)
     assert w["uncertainty"] == pytest.approx(1.25 * 0.2, rel=1e-6)
+
+
+def test_no_error_is_relative_to_a_stuck_dampers_zero_energy():
+    """The wedge at 9.6 N is stuck at the peak on the paper rig (0 mJ at the reference): an
+    energy against 0 has no relative error and drops out of the worst error."""
+    from workbench.post.fidelity import relative_errors, worst
+
+    ref = _setting("nt", 64, {"stuck": 0.0, "slips": 64.0})
+    same = _setting("nt", 32, {"stuck": 0.0, "slips": 64.0})
+    other = _setting("nt", 16, {"stuck": 0.002, "slips": 60.8})
+    e_same, e_other = relative_errors(same, ref), relative_errors(other, ref)
+    assert e_same["stuck"]["friction_energy_mj"] == 0.0
+    assert "friction_energy_mj" not in e_other["stuck"]
+    assert e_other["stuck"]["peak_amplitude_mm"] == 0.0  # the other quantities stay
+    assert worst(e_other) == pytest.approx(5.0) == worst(e_other, "friction_energy_mj")
+    other.results["slips"].branch.failed = True  # a failed case: no worst error at all
+    assert worst(relative_errors(other, ref)) is None

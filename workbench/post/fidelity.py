@@ -118,12 +118,27 @@ class Setting:
 
 
 def worst(errors: dict[str, dict[str, float | None]], q: str | None = None) -> float | None:
-    """Largest of ``errors[condition][quantity]`` (percent); None if any is missing."""
+    """Largest of ``errors[condition][quantity]`` (percent); None if any is missing (None).
+
+    A quantity absent from a condition's errors has no relative error at all (its
+    reference value is 0: see :func:`relative_errors`) and is left out."""
     qs = [q] if q else [k for k, _, _ in QUANTITIES]
-    vals = [errors.get(c, {}).get(k) for c in errors for k in qs]
-    if not errors or any(v is None or not math.isfinite(v) for v in vals):
+    vals = [errors[c][k] for c in errors for k in qs if k in errors[c]]
+    if not errors or not vals or any(v is None or not math.isfinite(v) for v in vals):
         return None
     return max(vals)
+
+
+def _relative(a: float | None, b: float | None, out: dict[str, float | None], q: str) -> None:
+    """``out[q]`` = |a - b| / |b| in percent; None if a value is missing; left out (no key)
+    where b is 0: a damper stuck at the peak dissipates nothing, and no error is relative
+    to nothing (0 % if ``a`` is 0 too)."""
+    if a is None or b is None:
+        out[q] = None
+    elif b != 0:
+        out[q] = abs(a - b) / abs(b) * 100.0
+    elif a == 0:
+        out[q] = 0.0
 
 
 def condition_name(phase: float, force: float, damper: str | None = None) -> str:
@@ -132,7 +147,8 @@ def condition_name(phase: float, force: float, damper: str | None = None) -> str
 
 
 def relative_errors(st: Setting, ref: Setting) -> dict[str, dict[str, float | None]]:
-    """condition -> quantity -> |q - q_ref| / |q_ref| in percent (None: no value to compare)."""
+    """condition -> quantity -> |q - q_ref| / |q_ref| in percent (None: no value to compare;
+    no key where q_ref is 0, see :func:`_relative`)."""
     out: dict[str, dict[str, float | None]] = {}
     for cond, r in st.results.items():
         rr = ref.results.get(cond)
@@ -140,10 +156,7 @@ def relative_errors(st: Setting, ref: Setting) -> dict[str, dict[str, float | No
         sr = rr.summary() if rr is not None and not rr.branch.failed else {}
         out[cond] = {}
         for q, _, _ in QUANTITIES:
-            a, b = s.get(q), sr.get(q)
-            out[cond][q] = (
-                abs(a - b) / abs(b) * 100.0 if a is not None and b is not None and b != 0 else None
-            )
+            _relative(s.get(q), sr.get(q), out[cond], q)
     return out
 
 
@@ -297,7 +310,7 @@ def limit_errors(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) ->
         out[cond] = {}
         for q, _, _ in QUANTITIES:
             a, lim = _value(st, cond, q), combined.get(cond, {}).get(q, {}).get("value")
-            out[cond][q] = abs(a - lim) / abs(lim) * 100.0 if a is not None and lim else None
+            _relative(a, lim, out[cond], q)
     return out
 
 
@@ -306,14 +319,14 @@ def pick_error(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) -> f
     all-knob limit where that limit is trusted (``asymptotic``), against the reference
     elsewhere (the limit of that condition and quantity is not known). None if any error
     is missing."""
-    errs = {
-        cond: {
-            q: (st.limit_errors if combined.get(cond, {}).get(q, {}).get("asymptotic")
-                else st.errors).get(cond, {}).get(q)
-            for q, _, _ in QUANTITIES
-        }
-        for cond in st.results
-    }  # fmt: skip
+    errs: dict[str, dict[str, float | None]] = {}
+    for cond in st.results:
+        errs[cond] = {}
+        for q, _, _ in QUANTITIES:
+            trusted = combined.get(cond, {}).get(q, {}).get("asymptotic")
+            src = (st.limit_errors if trusted else st.errors).get(cond, {})
+            if q in src or cond not in (st.limit_errors if trusted else st.errors):
+                errs[cond][q] = src.get(q)
     return worst(errs)
 
 

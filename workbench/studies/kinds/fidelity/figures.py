@@ -426,3 +426,77 @@ def plot_base_vs_limit(
     rows = math.ceil(len(handles) / min(5, max(1, len(handles))))
     fig.tight_layout(rect=(0, 0.04 + 0.035 * rows, 1, 0.95))
     return save_figure(fig, path)
+
+
+@styled
+def plot_base_per_knob(table: dict[str, dict[str, dict[str, Any]]], path: str | Path) -> Path:
+    """The base's error against each knob's own limit, per case, with its uncertainty.
+
+    ``table``: condition -> quantity -> the row of
+    ``report_base.base_vs_limit`` (``knobs``: knob -> ``error_vs_limit_pct``,
+    ``uncertainty_pct``). A knob whose limit is not trusted for a case gets a
+    grey cross on the bottom edge and no number.
+    """
+    from matplotlib.transforms import blended_transform_factory
+
+    plt = pyplot()
+    qs = ["peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj"]
+    conds = list(table)
+    knobs = list(dict.fromkeys(k for c in conds for q in qs for k in table[c][q]["knobs"]))
+    fig, axes = plt.subplots(1, 3, figsize=(FIGSIZE[0] * 1.9, FIGSIZE[1] * 1.2))
+    width = 0.8 / max(1, len(knobs))
+    for ax, q in zip(axes, qs, strict=True):
+        tr = blended_transform_factory(ax.transData, ax.transAxes)
+        ys = []
+        for j, knob in enumerate(knobs):
+            for i, c in enumerate(conds):
+                d = table[c][q]["knobs"].get(knob)
+                if d is None:
+                    continue  # the knob does not reach this damper
+                x = i - 0.4 + width * (j + 0.5)
+                e, u = d["error_vs_limit_pct"], d["uncertainty_pct"] or 0.0
+                if e is None:
+                    ax.plot([x], [0.03], marker="x", ms=5, color="0.6", transform=tr, clip_on=False)
+                    continue
+                y = max(e, ERR_FLOOR)
+                ys.append(y)
+                ax.errorbar(
+                    [x],
+                    [y],
+                    yerr=[[min(u, 0.999 * y)], [u]],
+                    marker=KNOB_MARKERS.get(knob, "o"),
+                    ms=6,
+                    color=KNOB_COLORS.get(knob, "0.3"),
+                    capsize=2,
+                    ls="none",
+                    label=knob if i == 0 or knob not in ax.get_legend_handles_labels()[1] else None,
+                )
+        ax.set_yscale("log")
+        if ys:
+            ax.set_ylim(min(ys) / 10.0, max(ys) * 3.0)
+        ax.set_xticks(range(len(conds)))
+        ax.set_xticklabels([c.replace(" deg ", "°\n") for c in conds], fontsize=7)
+        ax.set_xlim(-0.5, len(conds) - 0.5)
+        for i in range(1, len(conds)):
+            ax.axvline(i - 0.5, color="0.85", lw=0.8)
+        ax.set_ylabel("error of the base against the knob's limit, %")
+        units = {"peak_amplitude_mm": "mm", "peak_frequency_hz": "Hz", "friction_energy_mj": "mJ"}
+        ax.set_title(f"{QUANTITY_TITLES[q]} ({units[q]})", fontsize=10)
+    handles, labels = [], []
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    from matplotlib.lines import Line2D
+
+    handles.append(Line2D([], [], ls="none", marker="x", color="0.6"))
+    labels.append("not asymptotic: no limit, no error")
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
+    fig.suptitle(
+        "the base against each knob's own Richardson limit (the other knobs at the base), "
+        "+- that limit's uncertainty",
+        fontsize=10,
+    )
+    fig.tight_layout(rect=(0, 0.07, 1, 0.95))
+    return save_figure(fig, path)

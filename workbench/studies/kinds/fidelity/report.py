@@ -292,7 +292,7 @@ def _base_section(
     out: Path, settings: list[Setting], summary: dict[str, Any], conds: list[str]
 ) -> dict[str, Any]:
     """The base setting against the limit: its chart, tables and section (report_base.py)."""
-    from .figures import plot_base_vs_limit
+    from .figures import plot_base_per_knob, plot_base_vs_limit
     from .report_base import base_section, base_vs_limit
 
     base = next(s for s in settings if s.role == "base")
@@ -326,7 +326,8 @@ def _base_section(
             if table[c][q]["error_vs_limit_pct"] is not None
         ]
     fig = plot_base_vs_limit(points, marks, out / "figures" / "fidelity_base_vs_limit.png")
-    return base_section(out, base, summary, conds, fig)
+    per_knob = plot_base_per_knob(table, out / "figures" / "fidelity_base_per_knob.png")
+    return base_section(out, base, summary, conds, [fig, per_knob])
 
 
 def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
@@ -424,7 +425,10 @@ def _setup_section(summary: dict[str, Any], ref: Setting, conds: list[str]) -> d
             f"{_kv(summary['reference'])}; its charged time {ref.time_s:.1f} s.",
             "Errors: |q - q_ref| / |q_ref| in percent for the peak amplitude (mm), the resonance "
             "frequency (Hz) and the friction energy per cycle at the peak (mJ), at every "
-            "condition. Times: geometry and reduction are the compute times recorded when those "
+            "condition. Where q_ref is 0 (a damper stuck at the peak dissipates nothing) no "
+            "error is relative to it: that quantity has no error at that condition (0 % if "
+            "the setting's value is 0 too) and is left out of the worst error.",
+            "Times: geometry and reduction are the compute times recorded when those "
             "stages were built (a stage shared by several settings is charged to each, as a user "
             "running that setting alone would pay it), assembly and HBM as measured when the "
             "setting was solved; the machine may have been shared, so times are indicative.",

@@ -145,7 +145,7 @@ def base_section(
     base: Setting,
     summary: dict[str, Any],
     conditions: list[str],
-    figure: Path | None,
+    figures: list[Path],
 ) -> dict[str, Any]:
     """Write the tables and return the report section "the base against the limit"."""
     table = base_vs_limit(base, summary, conditions)
@@ -192,14 +192,14 @@ def base_section(
             }
         ],
     }
-    if figure is not None:
-        sec["figures"].append(
-            {
-                "path": str(figure.relative_to(out)),
-                "caption": "every setting's error against the extrapolated limit vs its "
-                "compute time; the base per case with the limit's uncertainty",
-            }
-        )
+    captions = [
+        "every setting's error against the extrapolated limit of every knob vs its compute "
+        "time; the base per case with the limit's uncertainty",
+        "the base's error against each knob's own limit per case, with that limit's "
+        "uncertainty (crosses: not asymptotic, no error)",
+    ]
+    for fig, cap in zip(figures, captions, strict=False):
+        sec["figures"].append({"path": str(fig.relative_to(out)), "caption": cap})
     return sec
 
 
