@@ -133,11 +133,24 @@ def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
     return out
 
 
-def _cell(d: dict[str, Any]) -> str:
-    e, u = d["error_vs_limit_pct"], d["uncertainty_pct"]
-    if e is None:
-        return "no trusted limit"
+def _pm(e: float | None, u: float | None) -> str:
     return f"{e:.3g} % +- {u:.2g} %" if u is not None else f"{e:.3g} %"
+
+
+def _cell(d: dict[str, Any]) -> str:
+    """All knobs (or why not), then each knob whose limit is trusted."""
+    e = d["error_vs_limit_pct"]
+    if e is not None:
+        head = _pm(e, d["uncertainty_pct"])
+    else:
+        bad = [k for k, v in d["knobs"].items() if v["error_vs_limit_pct"] is None]
+        head = "no trusted limit" + (f" ({', '.join(bad)} not asymptotic)" if bad else "")
+    per = [
+        f"{k} {_pm(v['error_vs_limit_pct'], v['uncertainty_pct'])}"
+        for k, v in d["knobs"].items()
+        if v["error_vs_limit_pct"] is not None
+    ]
+    return head + (f"; against each knob's own limit: {', '.join(per)}" if per else "")
 
 
 def base_section(
@@ -174,11 +187,8 @@ def base_section(
         "difference, not a limit).",
     ]
     for cond in conditions:
-        text.append(
-            f"{cond}: "
-            + "; ".join(f"{name} {_cell(table[cond][q])}" for q, name, _ in QUANTITIES)
-            + "."
-        )
+        for q, name, _ in QUANTITIES:
+            text.append(f"{cond}, {name}: {_cell(table[cond][q])}.")
     sec: dict[str, Any] = {
         "id": "base-vs-limit",
         "title": "The base setting against the limit",
