@@ -177,6 +177,9 @@ def test_study_help_mentions_the_fidelity_options():
         "--tolerance",
         "--knobs",
         "--levels-mesh-size",
+        "--levels-contact-mesh-size",
+        "--contact-mesh-size",
+        "--damper-phases",
         "--levels-modes",
         "--levels-harmonics",
         "--levels-nt",
@@ -192,10 +195,11 @@ def test_the_study_file_resolves():
 
     spec = load_study(ROOT / "studies" / "fidelity.toml", {"tolerance": "1%"})
     assert spec.kind == "fidelity" and spec.fidelity.tolerance == 1.0
-    settings, ladders = plan_settings(spec, "cone")
+    settings, ladders = plan_settings(spec, ["cone"])
     ref = next(s for s in settings if s.role == "reference")
     assert ref.values == {
         "mesh-size": min(spec.fidelity.levels_mesh_size),
+        "contact-mesh-size": 1.5,  # geometry/rig.toml's: not a knob of this study
         "modes": max(spec.fidelity.levels_modes),
         "harmonics": list(range(8)),
         "nt": max(spec.fidelity.levels_nt),

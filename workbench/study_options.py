@@ -293,6 +293,18 @@ class SharedOptions:
         unit="mm",
         role="model",
     )
+    contact_mesh_size: float | None = option(
+        "float",
+        None,
+        "element size at the contact points (rig and damper), mm; capped by the contact "
+        "spacing and the global mesh size (None: the geometry file's rig.mesh.contact_size_mm)",
+        "fidelity",
+        lo=0.2,
+        hi=50.0,
+        optional=True,
+        unit="mm",
+        role="model",
+    )
     modes: int = option(
         "int",
         12,

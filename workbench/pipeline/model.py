@@ -49,6 +49,8 @@ def geometry_request(case: Case) -> dict[str, Any]:
     for option, (name, kind) in get_shape(case.damper).study_options.items():
         if s.get(option) is not None:
             overrides.setdefault(case.damper, {})[name] = kind(s[option])
+    if s.get("contact-mesh-size") is not None:  # the element size at the contact points
+        overrides["rig"] = {"mesh": {"contact_size_mm": float(s["contact-mesh-size"])}}
     return {
         "damper": case.damper,
         "geometry_file": s.get("geometry"),

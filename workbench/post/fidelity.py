@@ -20,7 +20,15 @@ from ..io import digest
 from .extrapolation import LimitEstimate, richardson
 from .results import CaseResult
 
-KNOBS = ("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper")
+KNOBS = (
+    "mesh-size",
+    "contact-mesh-size",
+    "modes",
+    "harmonics",
+    "nt",
+    "points-per-line",
+    "rigid-damper",
+)
 
 
 QUANTITIES = (
@@ -44,6 +52,8 @@ def level_label(knob: str, v: Any) -> str:
     """A short label of one knob value (used on the charts and in the tables)."""
     if knob == "mesh-size":
         return f"mesh {v:g} mm"
+    if knob == "contact-mesh-size":
+        return f"contact {v:g} mm"
     if knob == "modes":
         return f"{v} modes"
     if knob == "harmonics":
@@ -59,7 +69,7 @@ def level_label(knob: str, v: Any) -> str:
 
 def fineness(knob: str, v: Any) -> tuple:
     """Sort key: larger is finer (more accurate, more expensive)."""
-    if knob == "mesh-size":
+    if knob in ("mesh-size", "contact-mesh-size"):
         return (-float(v),)
     if knob == "harmonics":
         return (max(v), len(v))
@@ -73,7 +83,7 @@ class Setting:
     """One combination of knob values, its measured cases, times and errors."""
 
     label: str
-    values: dict[str, Any]  # knob -> value (all six knobs)
+    values: dict[str, Any]  # knob -> value (every knob of KNOBS)
     role: str = "knob"  # "base", "knob", "reference", "combined"
     members: list[tuple[str, str]] = field(default_factory=list)  # (knob, level label)
     results: dict[str, CaseResult] = field(default_factory=dict)  # condition -> case
@@ -108,20 +118,37 @@ class Setting:
 
 
 def worst(errors: dict[str, dict[str, float | None]], q: str | None = None) -> float | None:
-    """Largest of ``errors[condition][quantity]`` (percent); None if any is missing."""
+    """Largest of ``errors[condition][quantity]`` (percent); None if any is missing (None).
+
+    A quantity absent from a condition's errors has no relative error at all (its
+    reference value is 0: see :func:`relative_errors`) and is left out."""
     qs = [q] if q else [k for k, _, _ in QUANTITIES]
-    vals = [errors.get(c, {}).get(k) for c in errors for k in qs]
-    if not errors or any(v is None or not math.isfinite(v) for v in vals):
+    vals = [errors[c][k] for c in errors for k in qs if k in errors[c]]
+    if not errors or not vals or any(v is None or not math.isfinite(v) for v in vals):
         return None
     return max(vals)
 
 
-def condition_name(phase: float, force: float) -> str:
-    return f"{phase:g} deg {force:g} N"
+def _relative(a: float | None, b: float | None, out: dict[str, float | None], q: str) -> None:
+    """``out[q]`` = |a - b| / |b| in percent; None if a value is missing; left out (no key)
+    where b is 0: a damper stuck at the peak dissipates nothing, and no error is relative
+    to nothing (0 % if ``a`` is 0 too)."""
+    if a is None or b is None:
+        out[q] = None
+    elif b != 0:
+        out[q] = abs(a - b) / abs(b) * 100.0
+    elif a == 0:
+        out[q] = 0.0
+
+
+def condition_name(phase: float, force: float, damper: str | None = None) -> str:
+    """A condition's name: '0 deg 30 N', or 'cone 0 deg 30 N' in a study of several dampers."""
+    return f"{damper + ' ' if damper else ''}{phase:g} deg {force:g} N"
 
 
 def relative_errors(st: Setting, ref: Setting) -> dict[str, dict[str, float | None]]:
-    """condition -> quantity -> |q - q_ref| / |q_ref| in percent (None: no value to compare)."""
+    """condition -> quantity -> |q - q_ref| / |q_ref| in percent (None: no value to compare;
+    no key where q_ref is 0, see :func:`_relative`)."""
     out: dict[str, dict[str, float | None]] = {}
     for cond, r in st.results.items():
         rr = ref.results.get(cond)
@@ -129,10 +156,7 @@ def relative_errors(st: Setting, ref: Setting) -> dict[str, dict[str, float | No
         sr = rr.summary() if rr is not None and not rr.branch.failed else {}
         out[cond] = {}
         for q, _, _ in QUANTITIES:
-            a, b = s.get(q), sr.get(q)
-            out[cond][q] = (
-                abs(a - b) / abs(b) * 100.0 if a is not None and b is not None and b != 0 else None
-            )
+            _relative(s.get(q), sr.get(q), out[cond], q)
     return out
 
 
@@ -149,16 +173,18 @@ def ladder_self_errors(ladders: dict[str, list[Setting]]) -> dict[str, list[floa
 
 
 NO_LADDER = "no fineness to extrapolate"  # the reason given for a modelling choice (rigid damper)
+# the reason given where a knob does not reach a condition's model (points per line: the wedge)
+NOT_APPLICABLE = "the knob does not reach this damper's model"
 
 
 def knob_h(knob: str, v: Any) -> float | None:
     """The fineness h of one knob level (smaller is finer) for Richardson extrapolation.
 
-    mesh size: the size in mm; modes: 1/modes; harmonics: 1/H of the highest
+    mesh size and contact mesh size: the size in mm; modes: 1/modes; harmonics: 1/H of the highest
     harmonic H; nt: 1/nt; points per line: 1/points. None for the rigid/flexible
     damper, which is no ladder of a fineness.
     """
-    if knob == "mesh-size":
+    if knob in ("mesh-size", "contact-mesh-size"):
         return float(v)
     if knob == "harmonics":
         return 1.0 / max(v) if max(v) > 0 else None
@@ -180,13 +206,18 @@ def _value(st: Setting, cond: str, q: str) -> float | None:
     return None if v is None or not math.isfinite(v) else float(v)
 
 
-def ladder_limits(ladders: dict[str, list[Setting]]) -> dict[str, dict[str, dict[str, Any]]]:
+def ladder_limits(
+    ladders: dict[str, list[Setting]], skip: set[tuple[str, str]] | frozenset = frozenset()
+) -> dict[str, dict[str, dict[str, Any]]]:
     """knob -> condition -> quantity -> :class:`LimitEstimate` from the knob's finest levels.
 
     Each knob's ladder (the other knobs at the base) is extrapolated with the
     observed order (``workbench.post.extrapolation.richardson``). A knob with
     no fineness (rigid damper) or two levels only falls back to its finest
-    level, flagged not asymptotic.
+    level, flagged not asymptotic. ``skip``: the (knob, condition) pairs where
+    the knob does not reach the condition's model (points per line on the
+    wedge): the finest level's value, method "not applicable", which
+    :func:`combined_limits` leaves out (no correction, no flag).
     """
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for knob, lad in ladders.items():
@@ -203,7 +234,12 @@ def ladder_limits(ladders: dict[str, list[Setting]]) -> dict[str, dict[str, dict
             out[knob][cond] = {}
             for q, _, _ in QUANTITIES:
                 vals = [_value(st, cond, q) for st in lad]
-                if ladder:
+                if (knob, cond) in skip:
+                    v = vals[-1]
+                    est = LimitEstimate(
+                        v, None, None, False, "not applicable", NOT_APPLICABLE, v, 0
+                    )
+                elif ladder:
                     est = richardson(hs, vals)
                 else:
                     v = vals[-1]
@@ -240,6 +276,8 @@ def combined_limits(
                 if not is_ladder(knob, lad):
                     continue  # a modelling choice, not a ladder towards a limit
                 est = limits[knob].get(cond, {}).get(q)
+                if est is not None and est.method == "not applicable":
+                    continue  # the knob does not reach this condition's model
                 orders[knob] = est.order if est is not None else None
                 if lad[-1].values[knob] != ref.values[knob]:
                     asym, unc = False, None
@@ -272,7 +310,7 @@ def limit_errors(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) ->
         out[cond] = {}
         for q, _, _ in QUANTITIES:
             a, lim = _value(st, cond, q), combined.get(cond, {}).get(q, {}).get("value")
-            out[cond][q] = abs(a - lim) / abs(lim) * 100.0 if a is not None and lim else None
+            _relative(a, lim, out[cond], q)
     return out
 
 
@@ -281,14 +319,14 @@ def pick_error(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) -> f
     all-knob limit where that limit is trusted (``asymptotic``), against the reference
     elsewhere (the limit of that condition and quantity is not known). None if any error
     is missing."""
-    errs = {
-        cond: {
-            q: (st.limit_errors if combined.get(cond, {}).get(q, {}).get("asymptotic")
-                else st.errors).get(cond, {}).get(q)
-            for q, _, _ in QUANTITIES
-        }
-        for cond in st.results
-    }  # fmt: skip
+    errs: dict[str, dict[str, float | None]] = {}
+    for cond in st.results:
+        errs[cond] = {}
+        for q, _, _ in QUANTITIES:
+            trusted = combined.get(cond, {}).get(q, {}).get("asymptotic")
+            src = (st.limit_errors if trusted else st.errors).get(cond, {})
+            if q in src or cond not in (st.limit_errors if trusted else st.errors):
+                errs[cond][q] = src.get(q)
     return worst(errs)
 
 

@@ -498,7 +498,7 @@ def fidelity_entry(comp, base, ref, out: str | Path):
     from ...hbm.nlmodes.record import NlModeBranch
     from ...hbm.nlmodes.synthesis import synthesize
     from ...pipeline import prepare_model
-    from ...post.fidelity import QUANTITIES, Setting, condition_name
+    from ...post.fidelity import QUANTITIES, Setting
 
     out = Path(out)
     st = Setting("nonlinear-mode synthesis", dict(base.values), "nlmode")
@@ -511,9 +511,10 @@ def fidelity_entry(comp, base, ref, out: str | Path):
     by_phase: dict[float, tuple] = {}
     prep = None
     invalid: list[str] = []
-    for (p, f), c in zip(comp.conditions, cases, strict=True):
+    forces = [f for _, _, f in comp.conditions]
+    for (_, p, f), c, cond in zip(comp.conditions, cases, comp.names, strict=True):
         if p not in by_phase:
-            key = backbone_key(c, (0.05, 300.0), 40, [f for _, f in comp.conditions])
+            key = backbone_key(c, (0.05, 300.0), 40, forces)
             h5, npz = ndir / f"{key}.h5", ndir / f"{key}.npz"
             if h5.is_file() and npz.is_file():
                 nm = NlModeBranch.load(h5)
@@ -522,7 +523,7 @@ def fidelity_entry(comp, base, ref, out: str | Path):
             else:
                 if prep is None:
                     prep = prepare_model(c, out)
-                nm, f1, band = family_backbone(prep, c, forces=[f for _, f in comp.conditions])
+                nm, f1, band = family_backbone(prep, c, forces=forces)
                 nm.save(h5)
                 from ...io import atomic_path
 
@@ -531,7 +532,6 @@ def fidelity_entry(comp, base, ref, out: str | Path):
             st.times["hbm"] += float(nm.timings.get("total", 0.0))
             by_phase[p] = (nm, f1, band)
         nm, f1, band = by_phase[p]
-        cond = condition_name(p, f)
         rr = ref.results.get(cond)
         sr = rr.summary() if rr is not None and not rr.branch.failed else {}
         t0 = time.perf_counter()

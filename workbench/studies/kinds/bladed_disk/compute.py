@@ -75,7 +75,7 @@ def disk_sectors(spec: StudySpec, out: Path, comm) -> dict[str, Any]:
     mesh = {
         k: float(v)
         for k, v in (
-            ("contact_size_mm", o.contact_mesh_size),
+            ("contact_size_mm", spec.contact_mesh_size),
             ("damper_size_mm", o.damper_mesh_size),
         )
         if v is not None

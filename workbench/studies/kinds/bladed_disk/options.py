@@ -37,17 +37,6 @@ class BladedDiskOptions:
         lo=0,
         role="case",
     )
-    contact_mesh_size: float | None = option(
-        "float",
-        None,
-        "bladed-disk: element size at the contact points, mm (None: the geometry file's)",
-        "bladed-disk",
-        lo=0.2,
-        hi=50.0,
-        optional=True,
-        unit="mm",
-        role="model",
-    )
     damper_mesh_size: float | None = option(
         "float",
         None,

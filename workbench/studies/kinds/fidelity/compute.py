@@ -1,8 +1,10 @@
 """The fidelity study: what each modelling knob costs and what it buys (issue 8).
 
-One damper under one or more loads (phase x force, the *conditions*) is
-solved at a *base* setting (the study's own ``mesh-size``, ``modes``,
-``harmonics``, ``nt``, ``points-per-line``, ``rigid-damper``), then with
+One or more dampers under one or more loads (damper and phase x force, the
+*conditions*; ``damper-phases`` picks the (damper, phase) pairs, by default
+every damper at every phase) are solved at a *base* setting (the study's
+own ``mesh-size``, ``contact-mesh-size``, ``modes``, ``harmonics``, ``nt``,
+``points-per-line``, ``rigid-damper``), then with
 ONE knob moved at a time to each of its ``levels-<knob>``, and once at the
 *reference*: every varied knob at its finest level at once. For every
 setting and condition the peak amplitude (mm), resonance frequency (Hz)
@@ -18,11 +20,16 @@ reference elsewhere (``workbench.post.fidelity.pick_error``).
 
 The time of a setting is what a user running that setting alone would pay:
 geometry (gmsh), reduction (Craig-Bampton of rig and damper), assembly and
-the harmonic balance of every condition. Geometry and reduction times are
+the harmonic balance of every condition (with several dampers, every
+damper's model). Geometry and reduction times are
 the compute times recorded in their cached records when they were built
 (a stage shared by several settings is charged to each), so they do not
 depend on whether this run found them cached; assembly and HBM times are
 measured when the setting is solved and kept in its cache records.
+
+A knob that does not reach a damper's model (points per line on the wedge)
+keeps that damper at the base level: its cases are the base's, and the
+knob neither corrects nor flags that damper's limit.
 
 A setting is summed up by its *worst error*: the largest of the three
 errors over every condition. The Pareto front is the set of settings that
@@ -79,9 +86,12 @@ from ...engine.spec import StudySpec
 from .ladders import (
     _check_sampling,
     _settings_dict,
+    base_values,
+    knob_applies,
     plan_settings,
     propose_combination,
 )
+from .options import damper_phases
 
 log = logging.getLogger(__name__)
 
@@ -94,12 +104,18 @@ _MAX_COMBOS = 3
 class _Computer:
     """Solves settings, reusing the case cache and the recorded stage times."""
 
-    def __init__(self, spec: StudySpec, damper: str, out: Path, force: bool):
-        self.spec, self.damper, self.out, self.force = spec, damper, out, force
+    def __init__(self, spec: StudySpec, out: Path, force: bool):
+        self.spec, self.out, self.force = spec, out, force
         self.base = spec.as_dict()
+        pairs = damper_phases(spec)
+        self.dampers = list(dict.fromkeys(d for d, _ in pairs))
+        self.base_values = base_values(spec, self.dampers)
+        # (damper, phase, force), the damper first, then the phase, then the force
         self.conditions = [
-            (float(p), float(f)) for p, f in itertools.product(spec.phases, spec.forces)
+            (d, float(p), float(f)) for (d, p), f in itertools.product(pairs, spec.forces)
         ]
+        several = len(self.dampers) > 1
+        self.names = [condition_name(p, f, d if several else None) for d, p, f in self.conditions]
         self.case_dir = out / "cache" / "cases"
         self.time_dir = out / "cache" / "fidelity"
         self.case_dir.mkdir(parents=True, exist_ok=True)
@@ -113,7 +129,23 @@ class _Computer:
 
     def cases(self, st: Setting) -> list[Case]:
         s = _settings_dict(self.base, st.values)
-        return [make_case(self.damper, p, f, s, st.label) for p, f in self.conditions]
+        out = []
+        for d, p, f in self.conditions:
+            sd = dict(s)
+            for knob in KNOBS:  # a knob that does not reach this damper: its base level
+                if not knob_applies(knob, d):
+                    sd[knob] = self.base_values[knob]
+            out.append(make_case(d, p, f, sd, st.label))
+        return out
+
+    def not_applicable(self, knobs) -> set[tuple[str, str]]:
+        """The (knob, condition name) pairs where the knob does not reach the model."""
+        return {
+            (k, n)
+            for k in knobs
+            for (d, _, _), n in zip(self.conditions, self.names, strict=True)
+            if not knob_applies(k, d)
+        }
 
     def _done(self, c: Case) -> bool:
         if self.force and c.digest not in self._fresh:
@@ -204,11 +236,14 @@ class _Computer:
     def load(self, st: Setting) -> None:
         """Fill ``st.results`` and ``st.times`` from the cache (every case must be there)."""
         st.results, st.times = {}, {s: 0.0 for s in STAGES}
-        for (p, f), c in zip(self.conditions, self.cases(st), strict=True):
-            st.results[condition_name(p, f)] = CaseResult.load(self.case_dir / f"{c.digest}.h5")
+        models: set[str] = set()
+        for name, c in zip(self.names, self.cases(st), strict=True):
+            st.results[name] = CaseResult.load(self.case_dir / f"{c.digest}.h5")
             t = json.loads((self.time_dir / f"case-{c.digest}.json").read_text())
-            for s in ("geometry", "reduction", "assembly"):
-                st.times[s] = float(t[s])  # the model's stages: charged once per setting
+            if c.model_digest not in models:  # each model's stages: charged once per setting
+                models.add(c.model_digest)
+                for s in ("geometry", "reduction", "assembly"):
+                    st.times[s] += float(t[s])
             st.times["hbm"] += float(t["hbm"])
 
     def run(self, settings: list[Setting], desc: str) -> None:
@@ -243,13 +278,15 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
             mpi_size(),
             "1: a fidelity study runs in one process (its times are what one process pays)",
         )
-    if len(spec.dampers) != 1:
-        raise InputError("dampers", spec.dampers, "exactly one damper in a fidelity study")
-    damper = spec.dampers[0]
     if not spec.fidelity.knobs:
         raise InputError("knobs", spec.fidelity.knobs, "at least one knob to vary")
-    settings, ladders = plan_settings(spec, damper)
-    comp = _Computer(spec, damper, out, force)
+    comp = _Computer(spec, out, force)
+    if getattr(spec, "nonlinear_modes", False) and len(comp.dampers) > 1:
+        raise InputError(
+            "nonlinear-modes", True, "false in a fidelity study of several dampers (one damper)"
+        )
+    damper = ", ".join(comp.dampers)
+    settings, ladders = plan_settings(spec, comp.dampers)
     ref = next(s for s in settings if s.role == "reference")
     log.info(
         "fidelity study '%s': %s, %d settings x %d conditions, reference %s",
@@ -267,7 +304,7 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
 
         settings.append(fidelity_entry(comp, settings[0], ref, out))
 
-    limits = ladder_limits(ladders)
+    limits = ladder_limits(ladders, comp.not_applicable(ladders))
     combined = combined_limits(ref, ladders, limits)
     for st in settings:
         st.limit_errors = limit_errors(st, combined)
@@ -299,7 +336,8 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
         "out": str(out),
         "report": str(out / "report.html"),
         "damper": damper,
-        "conditions": [condition_name(p, f) for p, f in comp.conditions],
+        "dampers": comp.dampers,
+        "conditions": list(comp.names),
         "knobs": {k: [level_label(k, s.values[k]) for s in lad] for k, lad in ladders.items()},
         "knob_self_errors_pct": {
             k: {level_label(k, st.values[k]): e for st, e in zip(lad, errs, strict=True)}
@@ -327,7 +365,7 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     }
     t_post = time.perf_counter()
     write_fidelity_outputs(
-        spec, out, settings, ladders, ref, front, summary, comp.conditions, t_post - t_start
+        spec, out, settings, ladders, ref, front, summary, comp.names, t_post - t_start
     )
     timings["post and report"] = time.perf_counter() - t_post
     timings["total"] = time.perf_counter() - t_start
@@ -474,7 +512,7 @@ def write_fidelity_outputs(
     ref: Setting,
     front: list[Setting],
     summary: dict[str, Any],
-    conditions: list[tuple[float, float]],
+    conditions: list[str],
     wall_s: float = 0.0,
 ) -> None:
     """Tables (CSV, JSON), charts, manifest.json and report.html."""

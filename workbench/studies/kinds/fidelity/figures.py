@@ -39,6 +39,7 @@ QUANTITY_TITLES = {
 }
 KNOB_COLORS = {
     "mesh-size": "#1f6fb4",
+    "contact-mesh-size": "#17becf",
     "modes": "#ff7f0e",
     "harmonics": "#2ca02c",
     "nt": "#9467bd",
@@ -49,6 +50,7 @@ KNOB_COLORS = {
 }
 KNOB_MARKERS = {
     "mesh-size": "o",
+    "contact-mesh-size": "h",
     "modes": "s",
     "harmonics": "^",
     "nt": "v",
@@ -126,6 +128,19 @@ def _log_axes(ax) -> None:
             axis.set_major_formatter(fmt)
 
 
+def _case_of(cond: str) -> str:
+    """'cone 0 deg 30 N' -> 'cone 0 deg': the condition without its force."""
+    return re.sub(r"\s*[-+0-9.eE]+ N$", "", cond)
+
+
+def _case_styles(conds: Sequence[str]) -> dict[str, tuple[str, str]]:
+    """condition -> (line style, marker): one per damper and phase (colours: the force)."""
+    cases = list(dict.fromkeys(_case_of(c) for c in conds))
+    ls = ["-", "--", ":", "-."]
+    mk = ["o", "s", "^", "D"]
+    return {c: (ls[cases.index(_case_of(c)) % 4], mk[cases.index(_case_of(c)) % 4]) for c in conds}
+
+
 def _force_of(cond: str) -> float:
     m = re.search(r"([-+0-9.eE]+) N$", cond)
     return float(m.group(1)) if m else 0.0
@@ -146,9 +161,11 @@ def plot_knob(
     axes = list(axes) if len(qs) > 1 else [axes]
     conds = list(next(iter(errors.values()))) if errors else []
     colors = force_colors([_force_of(c) for c in conds])
+    styles = _case_styles(conds)
     for ax, q in zip(axes, qs, strict=True):
         for cond in conds:
             col = colors[_force_of(cond)]
+            ls, mk = styles[cond]
             xs, ys, low = [], [], []
             for t, e in zip(times_s, errors[q][cond], strict=True):
                 y, fl = _floor(e)
@@ -158,8 +175,8 @@ def plot_knob(
                     continue
                 xs.append(t)
                 ys.append(y)
-            ax.plot(xs, ys, "-o", color=col, lw=1.3, ms=5, label=cond)
-            _edge(ax, low, marker="o", ms=5, mfc="white", mec=col)
+            ax.plot(xs, ys, ls=ls, marker=mk, color=col, lw=1.3, ms=5, label=cond)
+            _edge(ax, low, marker=mk, ms=5, mfc="white", mec=col)
         _log_axes(ax)
         for i, (t, lab) in enumerate(zip(times_s, levels, strict=True)):
             ys = [_floor(errors[q][c][i])[0] for c in conds]
@@ -295,4 +312,191 @@ def plot_pareto(
     axes[1, 1].legend(loc="best", fontsize=7)
     fig.suptitle("every setting: error vs compute time, with the Pareto front", fontsize=11)
     fig.tight_layout()
+    return save_figure(fig, path)
+
+
+@styled
+def plot_base_vs_limit(
+    points: Sequence[dict[str, Any]],
+    base: dict[str, Any],
+    path: str | Path,
+) -> Path:
+    """Error against the extrapolated limit vs compute time, the base setting per case.
+
+    ``points``: every setting, dicts with ``label``, ``group`` (the knob moved,
+    "base", "reference"), ``time_s`` and per quantity its worst error against
+    the limit (percent) over the cases where the limit is trusted (None: none
+    is). ``base``: ``time_s`` and per quantity a list of ``(case, error %,
+    uncertainty %)`` for the trusted cases, and ``untrusted[quantity]``: the
+    cases with no trusted limit, named on the panel instead of a number.
+    """
+    plt = pyplot()
+    qs = ["peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj"]
+    units = {"peak_amplitude_mm": "mm", "peak_frequency_hz": "Hz", "friction_energy_mj": "mJ"}
+    fig, axes = plt.subplots(1, 3, figsize=(FIGSIZE[0] * 1.9, FIGSIZE[1] * 1.15))
+    groups = list(dict.fromkeys(p["group"] for p in points))
+    extra = iter(_EXTRA_COLORS)
+    gcol = {g: KNOB_COLORS.get(g) or next(extra, "#7f7f7f") for g in groups}
+    gcol["reference"] = "0.45"
+    all_cases = list(dict.fromkeys(c for q in qs for c, _, _ in base[q]))
+    all_cases += [c for q in qs for c in base["untrusted"][q] if c not in all_cases]
+    colors = force_colors([_force_of(c) for c in all_cases])
+    styles = _case_styles(all_cases)
+    handles: dict[str, Any] = {}
+    for ax, q in zip(axes, qs, strict=True):
+        drawn = False
+        for g in groups:
+            sel = [p for p in points if p["group"] == g and _floor(p.get(q))[0] is not None]
+            if sel:
+                h = ax.scatter(
+                    [p["time_s"] for p in sel],
+                    [_floor(p[q])[0] for p in sel],
+                    marker=KNOB_MARKERS.get(g, "o"),
+                    s=26,
+                    color=gcol[g],
+                    alpha=0.55,
+                    zorder=2,
+                )
+                handles.setdefault(f"{g} (worst case)", h)
+                drawn = True
+        n = len(base[q])
+        # the lowest error drawn: a band reaching zero (uncertainty >= error) ends a third
+        # of it lower, with an arrow down (a log axis has no zero)
+        ys = [_floor(p.get(q))[0] for p in points] + [max(e, ERR_FLOOR) for _, e, _ in base[q]]
+        ys = [y for y in ys if y is not None]
+        bottom = min(ys) / 3.0 if ys else ERR_FLOOR
+        for i, (case, e, u) in enumerate(base[q]):
+            x = base["time_s"] * 1.07 ** (i - (n - 1) / 2)
+            y = max(e, ERR_FLOOR)
+            u = u or 0.0
+            to_zero = y - u <= bottom
+            lo = y - bottom if to_zero else u
+            col = colors[_force_of(case)]
+            h = ax.errorbar(
+                [x],
+                [y],
+                yerr=[[lo], [u]],
+                marker=styles[case][1],
+                ms=8,
+                color=col,
+                mec="black",
+                capsize=3,
+                ls="none",
+                zorder=4,
+            )
+            if to_zero:
+                ax.plot([x], [bottom], marker="v", ms=5, color=col, zorder=4)
+            handles.setdefault(f"base: {case}", h)
+            drawn = True
+        if drawn:
+            _log_axes(ax)
+        else:
+            ax.set_xticks([])
+            ax.set_yticks([])
+        bad = base["untrusted"][q]
+        if bad:
+            ax.text(
+                0.02,
+                0.98,
+                "no trusted limit (no error given):\n" + "\n".join(bad),
+                transform=ax.transAxes,
+                fontsize=7,
+                va="top",
+                ha="left",
+                bbox=dict(boxstyle="round", fc="#fff3e0", ec="#e69500", lw=0.8),
+                zorder=5,
+            )
+        ax.set_xlabel("compute time of the setting, s")
+        ax.set_ylabel("error against the limit, %")
+        ax.set_title(f"{QUANTITY_TITLES[q]} ({units[q]})", fontsize=10)
+    fig.legend(
+        list(handles.values()),
+        list(handles),
+        loc="lower center",
+        ncol=min(5, max(1, len(handles))),
+        fontsize=7,
+        frameon=False,
+    )
+    fig.suptitle(
+        "error against the extrapolated limit vs compute time: every setting (worst of the "
+        "cases with a trusted limit) and the base per case (+- the limit's uncertainty; "
+        "an arrow: the band reaches 0)",
+        fontsize=10,
+    )
+    rows = math.ceil(len(handles) / min(5, max(1, len(handles))))
+    fig.tight_layout(rect=(0, 0.04 + 0.035 * rows, 1, 0.95))
+    return save_figure(fig, path)
+
+
+@styled
+def plot_base_per_knob(table: dict[str, dict[str, dict[str, Any]]], path: str | Path) -> Path:
+    """The base's error against each knob's own limit, per case, with its uncertainty.
+
+    ``table``: condition -> quantity -> the row of
+    ``report_base.base_vs_limit`` (``knobs``: knob -> ``error_vs_limit_pct``,
+    ``uncertainty_pct``). A knob whose limit is not trusted for a case gets a
+    grey cross on the bottom edge and no number.
+    """
+    from matplotlib.transforms import blended_transform_factory
+
+    plt = pyplot()
+    qs = ["peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj"]
+    conds = list(table)
+    knobs = list(dict.fromkeys(k for c in conds for q in qs for k in table[c][q]["knobs"]))
+    fig, axes = plt.subplots(1, 3, figsize=(FIGSIZE[0] * 1.9, FIGSIZE[1] * 1.2))
+    width = 0.8 / max(1, len(knobs))
+    for ax, q in zip(axes, qs, strict=True):
+        tr = blended_transform_factory(ax.transData, ax.transAxes)
+        ys = []
+        for j, knob in enumerate(knobs):
+            for i, c in enumerate(conds):
+                d = table[c][q]["knobs"].get(knob)
+                if d is None:
+                    continue  # the knob does not reach this damper
+                x = i - 0.4 + width * (j + 0.5)
+                e, u = d["error_vs_limit_pct"], d["uncertainty_pct"] or 0.0
+                if e is None:
+                    ax.plot([x], [0.03], marker="x", ms=5, color="0.6", transform=tr, clip_on=False)
+                    continue
+                y = max(e, ERR_FLOOR)
+                ys.append(y)
+                ax.errorbar(
+                    [x],
+                    [y],
+                    yerr=[[min(u, 0.999 * y)], [u]],
+                    marker=KNOB_MARKERS.get(knob, "o"),
+                    ms=6,
+                    color=KNOB_COLORS.get(knob, "0.3"),
+                    capsize=2,
+                    ls="none",
+                    label=knob if i == 0 or knob not in ax.get_legend_handles_labels()[1] else None,
+                )
+        ax.set_yscale("log")
+        if ys:
+            ax.set_ylim(min(ys) / 10.0, max(ys) * 3.0)
+        ax.set_xticks(range(len(conds)))
+        ax.set_xticklabels([c.replace(" deg ", "°\n") for c in conds], fontsize=7)
+        ax.set_xlim(-0.5, len(conds) - 0.5)
+        for i in range(1, len(conds)):
+            ax.axvline(i - 0.5, color="0.85", lw=0.8)
+        ax.set_ylabel("error of the base against the knob's limit, %")
+        units = {"peak_amplitude_mm": "mm", "peak_frequency_hz": "Hz", "friction_energy_mj": "mJ"}
+        ax.set_title(f"{QUANTITY_TITLES[q]} ({units[q]})", fontsize=10)
+    handles, labels = [], []
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    from matplotlib.lines import Line2D
+
+    handles.append(Line2D([], [], ls="none", marker="x", color="0.6"))
+    labels.append("not asymptotic: no limit, no error")
+    fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
+    fig.suptitle(
+        "the base against each knob's own Richardson limit (the other knobs at the base), "
+        "+- that limit's uncertainty",
+        fontsize=10,
+    )
+    fig.tight_layout(rect=(0, 0.07, 1, 0.95))
     return save_figure(fig, path)

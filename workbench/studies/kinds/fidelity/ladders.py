@@ -18,23 +18,39 @@ from ...engine.spec import StudySpec
 from .options import parse_harmonics
 
 
-def base_values(spec: StudySpec, damper: str) -> dict[str, Any]:
-    """The base setting's knob values, with 'file default' (None) resolved to numbers."""
+def knob_applies(knob: str, damper: str) -> bool:
+    """Whether ``knob`` reaches the model of ``damper`` (points per line: not the wedge's
+    faces, which have their own grid of points)."""
+    from ....geometry.shapes import get as get_shape
+
+    return knob != "points-per-line" or knob in get_shape(damper).study_options
+
+
+def base_values(spec: StudySpec, dampers: list[str]) -> dict[str, Any]:
+    """The base setting's knob values, with 'file default' (None) resolved to numbers.
+
+    The rig's mesh sizes are the same for every damper; the points per line
+    are the first damper's that has contact lines (None if none has)."""
     from ....geometry import load_geometry_params
     from ....hbm.core.fourier import default_nt
 
     v = {
         "mesh-size": spec.mesh_size,
+        "contact-mesh-size": spec.contact_mesh_size,
         "modes": int(spec.modes),
         "harmonics": sorted(int(h) for h in spec.harmonics),
         "nt": spec.nt,
         "points-per-line": spec.points_per_line,
         "rigid-damper": bool(spec.rigid_damper),
     }
-    if v["mesh-size"] is None or v["points-per-line"] is None:
+    for damper in dampers:
+        if None not in (v["mesh-size"], v["contact-mesh-size"], v["points-per-line"]):
+            break
         gp = load_geometry_params(damper, spec.geometry)
         if v["mesh-size"] is None:
             v["mesh-size"] = float(gp.rig.mesh.size_mm)
+        if v["contact-mesh-size"] is None:
+            v["contact-mesh-size"] = float(gp.rig.mesh.contact_size_mm)
         if v["points-per-line"] is None:
             v["points-per-line"] = int(getattr(gp.shape, "n_contact_points", 0)) or None
     if v["nt"] is None:
@@ -46,6 +62,7 @@ def knob_levels(spec: StudySpec) -> dict[str, list[Any]]:
     """knob -> its levels (settings values), coarsest first, for the knobs the study varies."""
     raw = {
         "mesh-size": [float(x) for x in spec.fidelity.levels_mesh_size],
+        "contact-mesh-size": [float(x) for x in spec.fidelity.levels_contact_mesh_size],
         "modes": [int(x) for x in spec.fidelity.levels_modes],
         "harmonics": [parse_harmonics(x) for x in spec.fidelity.levels_harmonics],
         "nt": [int(x) for x in spec.fidelity.levels_nt],
@@ -77,9 +94,11 @@ def _settings_dict(base: dict[str, Any], values: dict[str, Any]) -> dict[str, An
     return s
 
 
-def plan_settings(spec: StudySpec, damper: str) -> tuple[list[Setting], dict[str, list[Setting]]]:
+def plan_settings(
+    spec: StudySpec, dampers: list[str]
+) -> tuple[list[Setting], dict[str, list[Setting]]]:
     """The unique settings (base, one-knob ladders, reference) and each knob's ladder."""
-    base_v = base_values(spec, damper)
+    base_v = base_values(spec, dampers)
     levels = knob_levels(spec)
     unique: dict[str, Setting] = {}
 

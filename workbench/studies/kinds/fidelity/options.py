@@ -36,7 +36,22 @@ class FidelityOptions:
         "knobs a fidelity study varies, one at a time about the base setting (the study's "
         "own mesh-size, modes, ...)",
         "fidelity",
-        choices=("mesh-size", "modes", "harmonics", "nt", "points-per-line", "rigid-damper"),
+        choices=(
+            "mesh-size",
+            "contact-mesh-size",
+            "modes",
+            "harmonics",
+            "nt",
+            "points-per-line",
+            "rigid-damper",
+        ),
+    )
+    damper_phases: list[str] = option(
+        "strs",
+        [],
+        "fidelity: the (damper, phase) pairs to solve, each 'damper phase' ('cone 0', "
+        "'wedge 0', 'cone 180'), every pair at every force (empty: every damper at every phase)",
+        "fidelity",
     )
     levels_mesh_size: list[float] = option(
         "floats",
@@ -45,6 +60,15 @@ class FidelityOptions:
         "fidelity",
         lo=0.0,
         lo_open=True,
+        unit="mm",
+    )
+    levels_contact_mesh_size: list[float] = option(
+        "floats",
+        [3.0, 1.5, 1.0],
+        "fidelity: element sizes at the contact points to try, mm (finest = smallest)",
+        "fidelity",
+        lo=0.2,
+        hi=50.0,
         unit="mm",
     )
     levels_modes: list[int] = option(
@@ -106,7 +130,35 @@ def parse_harmonics(text: Any, param: str = "levels-harmonics") -> list[int]:
     return sorted(hs)
 
 
+def damper_phases(spec: Any) -> list[tuple[str, float]]:
+    """The study's (damper, phase) pairs: ``damper-phases`` parsed, or every damper at every
+    phase. Each pair's damper must be one of ``dampers``, its phase one of ``phases``."""
+    if not spec.fidelity.damper_phases:
+        return [(d, float(p)) for d in spec.dampers for p in spec.phases]
+    out: list[tuple[str, float]] = []
+    for i, text in enumerate(spec.fidelity.damper_phases):
+        param = f"damper-phases[{i}]"
+        parts = str(text).split()
+        allowed = (
+            f"'damper phase' with a damper of dampers ({', '.join(spec.dampers)}) and a "
+            f"phase of phases ({', '.join(f'{p:g}' for p in spec.phases)}), e.g. 'cone 0'"
+        )
+        if len(parts) != 2 or parts[0] not in spec.dampers:
+            raise InputError(param, text, allowed)
+        try:
+            phase = float(parts[1])
+        except ValueError:
+            raise InputError(param, text, allowed) from None
+        if phase not in [float(p) for p in spec.phases]:
+            raise InputError(param, text, allowed)
+        if (parts[0], phase) in out:
+            raise InputError(param, text, "pairs that are not repeated")
+        out.append((parts[0], phase))
+    return out
+
+
 def check(spec: Any) -> None:
-    """Every harmonic set of ``levels-harmonics`` parses."""
+    """Every harmonic set of ``levels-harmonics`` and every ``damper-phases`` pair parses."""
     for i, text in enumerate(spec.fidelity.levels_harmonics):
         parse_harmonics(text, f"levels-harmonics[{i}]")
+    damper_phases(spec)

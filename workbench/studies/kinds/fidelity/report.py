@@ -17,10 +17,10 @@ from ....io.csv_rows import write_rows_csv
 from ....post.fidelity import (
     KNOBS,
     NO_LADDER,
+    NOT_APPLICABLE,
     QUANTITIES,
     STAGES,
     Setting,
-    condition_name,
     ladder_self_errors,
     level_label,
     limit_uncertainty_pct,
@@ -55,7 +55,7 @@ def fidelity_outputs(
     ref: Setting,
     front: list[Setting],
     summary: dict[str, Any],
-    conditions: list[tuple[float, float]],
+    conditions: list[str],
     tolerance: float | None,
     wall_s: float = 0.0,
 ) -> tuple[list[str], dict[str, float], list[dict[str, Any]]]:
@@ -102,7 +102,7 @@ def fidelity_outputs(
         ],
     )
 
-    conds = [condition_name(p, f) for p, f in conditions]
+    conds = list(conditions)
     sections = [_setup_section(summary, ref, conds)]
     self_err = ladder_self_errors(ladders)
     for knob, lad in ladders.items():
@@ -164,6 +164,7 @@ def fidelity_outputs(
             }
         )
     sections.append(_limits_section(summary, tables))
+    sections.append(_base_section(out, settings, summary, conds))
     tol = tolerance
     picked = (summary.get("picked") or {}).get("picked")
     cand = [s for s in settings if s.role != "reference"]
@@ -287,6 +288,48 @@ def limit_rows(summary: dict[str, Any]) -> list[dict[str, Any]]:
     return rows
 
 
+def _base_section(
+    out: Path, settings: list[Setting], summary: dict[str, Any], conds: list[str]
+) -> dict[str, Any]:
+    """The base setting against the limit: its chart, tables and section (report_base.py)."""
+    from .figures import plot_base_per_knob, plot_base_vs_limit
+    from .report_base import base_section, base_vs_limit
+
+    base = next(s for s in settings if s.role == "base")
+    table = base_vs_limit(base, summary, conds)
+    qs = [q for q, _, _ in QUANTITIES]
+    trusted = {q: [c for c in conds if table[c][q]["asymptotic"]] for q in qs}
+
+    def worst_trusted(st: Setting, q: str) -> float | None:
+        es = [st.limit_errors.get(c, {}).get(q) for c in trusted[q]]
+        es = [e for e in es if e is not None]
+        return max(es) if es else None
+
+    points = [
+        {
+            "label": s.label,
+            "group": s.members[0][0] if s.role == "knob" and s.members else s.role,
+            "time_s": s.time_s,
+            **{q: worst_trusted(s, q) for q in qs},
+        }
+        for s in settings
+        if s.role != "base"
+    ]
+    marks: dict[str, Any] = {
+        "time_s": base.time_s,
+        "untrusted": {q: [c for c in conds if c not in trusted[q]] for q in qs},
+    }
+    for q in qs:
+        marks[q] = [
+            (c, table[c][q]["error_vs_limit_pct"], table[c][q]["uncertainty_pct"])
+            for c in trusted[q]
+            if table[c][q]["error_vs_limit_pct"] is not None
+        ]
+    fig = plot_base_vs_limit(points, marks, out / "figures" / "fidelity_base_vs_limit.png")
+    per_knob = plot_base_per_knob(table, out / "figures" / "fidelity_base_per_knob.png")
+    return base_section(out, base, summary, conds, [fig, per_knob])
+
+
 def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
     write_csv(tables / "fidelity_limits.csv", limit_rows(summary))
     choices = sorted(  # modelling choices (the rigid damper): no limit to estimate
@@ -300,7 +343,7 @@ def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
             for k, lim in summary["knob_limits"].items()
             for qs in lim.values()
             for e in qs.values()
-            if not e["asymptotic"] and k not in choices
+            if not e["asymptotic"] and k not in choices and e["reason"] != NOT_APPLICABLE
         }
     )
     text = [
@@ -382,7 +425,10 @@ def _setup_section(summary: dict[str, Any], ref: Setting, conds: list[str]) -> d
             f"{_kv(summary['reference'])}; its charged time {ref.time_s:.1f} s.",
             "Errors: |q - q_ref| / |q_ref| in percent for the peak amplitude (mm), the resonance "
             "frequency (Hz) and the friction energy per cycle at the peak (mJ), at every "
-            "condition. Times: geometry and reduction are the compute times recorded when those "
+            "condition. Where q_ref is 0 (a damper stuck at the peak dissipates nothing) no "
+            "error is relative to it: that quantity has no error at that condition (0 % if "
+            "the setting's value is 0 too) and is left out of the worst error.",
+            "Times: geometry and reduction are the compute times recorded when those "
             "stages were built (a stage shared by several settings is charged to each, as a user "
             "running that setting alone would pay it), assembly and HBM as measured when the "
             "setting was solved; the machine may have been shared, so times are indicative.",

@@ -1,0 +1,216 @@
+"""The base setting against the extrapolated limit: one row per case and quantity.
+
+A fidelity study whose base setting is a production job's (the paper rig's
+``make run``: studies/fidelity_paper_rig.toml) answers "how far is that job
+from the converged model?". Per condition and quantity this module gives
+
+* the error of the base against the limit of every knob at once
+  (``workbench.post.fidelity.combined_limits``), with the limit's
+  uncertainty, ONLY where that limit is trusted (``asymptotic``); elsewhere
+  no number, the reason instead;
+* per knob, the base's error against that knob's own Richardson limit (the
+  other knobs at the base, so the base is a level of that ladder), again
+  only where the knob's finest levels are asymptotic;
+* the base's error against the reference (every knob at its finest level),
+  which is no limit but a measured difference.
+
+It writes ``tables/fidelity_base_vs_limit.json`` (machine-readable, for
+docs/FINDINGS.md) and ``.csv``, and returns the report section. Plain data
+on the study's settings and JSON summary; the chart is
+:func:`workbench.studies.kinds.fidelity.figures.plot_base_vs_limit`.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from ....io import write_json
+from ....io.csv_rows import write_rows_csv
+from ....post.fidelity import NOT_APPLICABLE, QUANTITIES, Setting
+
+
+def _pct(num: float | None, den: float | None) -> float | None:
+    if num is None or den is None or den == 0 or not math.isfinite(num):
+        return None
+    return abs(num) / abs(den) * 100.0
+
+
+def _value(st: Setting, cond: str, q: str) -> float | None:
+    r = st.results.get(cond)
+    if r is None or r.branch.failed:
+        return None
+    v = r.summary().get(q)
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+def base_vs_limit(
+    base: Setting, summary: dict[str, Any], conditions: list[str]
+) -> dict[str, dict[str, dict[str, Any]]]:
+    """condition -> quantity -> the base's value, its errors and the limits (see module doc).
+
+    Errors and uncertainties in percent of the limit; ``limit`` and
+    ``uncertainty`` in the quantity's units. ``error_vs_limit_pct`` and
+    ``uncertainty_pct`` are None where the limit is not trusted
+    (``asymptotic`` False, ``reason`` says why).
+    """
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for cond in conditions:
+        out[cond] = {}
+        for q, _, unit in QUANTITIES:
+            v = _value(base, cond, q)
+            lim = summary["limit"].get(cond, {}).get(q, {})
+            trusted = bool(lim.get("asymptotic")) and v is not None
+            knobs: dict[str, Any] = {}
+            for knob, by_cond in summary["knob_limits"].items():
+                e = by_cond.get(cond, {}).get(q)
+                if e is None or e["reason"] == NOT_APPLICABLE or e["method"] == "not applicable":
+                    continue
+                ok = bool(e["asymptotic"]) and v is not None and e["value"] is not None
+                knobs[knob] = {
+                    "limit": e["value"] if ok else None,
+                    "uncertainty": e["uncertainty"] if ok else None,
+                    "order": e["order"],
+                    "asymptotic": bool(e["asymptotic"]),
+                    "error_vs_limit_pct": _pct(v - e["value"], e["value"]) if ok else None,
+                    "uncertainty_pct": _pct(e["uncertainty"], e["value"]) if ok else None,
+                    "reason": e["reason"],
+                }
+            out[cond][q] = {
+                "unit": unit,
+                "base": v,
+                "limit": lim.get("value") if trusted else None,
+                "uncertainty": lim.get("uncertainty") if trusted else None,
+                "asymptotic": trusted,
+                "error_vs_limit_pct": base.limit_errors.get(cond, {}).get(q) if trusted else None,
+                "uncertainty_pct": _pct(lim.get("uncertainty"), lim.get("value"))
+                if trusted
+                else None,
+                "reason": "" if trusted else (lim.get("reason") or "no value to compare"),
+                "error_vs_reference_pct": base.errors.get(cond, {}).get(q),
+                "knobs": knobs,
+            }
+    return out
+
+
+def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
+    """Flat rows of :func:`base_vs_limit` for the CSV: all knobs, then each knob."""
+    out = []
+    for cond, qs in table.items():
+        for q, d in qs.items():
+            out.append(
+                {
+                    "condition": cond,
+                    "quantity": q,
+                    "limit of": "all knobs",
+                    "base": d["base"],
+                    "limit": d["limit"],
+                    "uncertainty": d["uncertainty"],
+                    "error vs limit %": d["error_vs_limit_pct"],
+                    "uncertainty %": d["uncertainty_pct"],
+                    "asymptotic": d["asymptotic"],
+                    "error vs reference %": d["error_vs_reference_pct"],
+                    "why not asymptotic": d["reason"],
+                }
+            )
+            for knob, k in d["knobs"].items():
+                out.append(
+                    {
+                        "condition": cond,
+                        "quantity": q,
+                        "limit of": knob,
+                        "base": d["base"],
+                        "limit": k["limit"],
+                        "uncertainty": k["uncertainty"],
+                        "error vs limit %": k["error_vs_limit_pct"],
+                        "uncertainty %": k["uncertainty_pct"],
+                        "asymptotic": k["asymptotic"],
+                        "error vs reference %": None,
+                        "why not asymptotic": k["reason"],
+                    }
+                )
+    return out
+
+
+def _pm(e: float | None, u: float | None) -> str:
+    return f"{e:.3g} % +- {u:.2g} %" if u is not None else f"{e:.3g} %"
+
+
+def _cell(d: dict[str, Any]) -> str:
+    """All knobs (or why not), then each knob whose limit is trusted."""
+    e = d["error_vs_limit_pct"]
+    if e is not None:
+        head = _pm(e, d["uncertainty_pct"])
+    else:
+        bad = [k for k, v in d["knobs"].items() if v["error_vs_limit_pct"] is None]
+        head = "no trusted limit" + (f" ({', '.join(bad)} not asymptotic)" if bad else "")
+    per = [
+        f"{k} {_pm(v['error_vs_limit_pct'], v['uncertainty_pct'])}"
+        for k, v in d["knobs"].items()
+        if v["error_vs_limit_pct"] is not None
+    ]
+    return head + (f"; against each knob's own limit: {', '.join(per)}" if per else "")
+
+
+def base_section(
+    out: Path,
+    base: Setting,
+    summary: dict[str, Any],
+    conditions: list[str],
+    figures: list[Path],
+) -> dict[str, Any]:
+    """Write the tables and return the report section "the base against the limit"."""
+    table = base_vs_limit(base, summary, conditions)
+    tables = out / "tables"
+    write_json(
+        tables / "fidelity_base_vs_limit.json",
+        {
+            "study": summary["study"],
+            "base": summary["base"],
+            "reference": summary["reference"],
+            "note": "errors and uncertainties in percent of the limit; limit and uncertainty "
+            "in the quantity's unit; None where the limit is not trusted (asymptotic false)",
+            "cases": table,
+        },
+    )
+    write_rows_csv(tables / "fidelity_base_vs_limit.csv", rows(table), digits=4)
+    text = [
+        "The base setting ("
+        + ", ".join(str(v) for v in summary["base"].values())
+        + ") against the extrapolated limit of every knob at once, per case: error in "
+        "percent of the limit, +- the limit's uncertainty. 'no trusted limit': some knob's "
+        "finest levels are not asymptotic for that case and quantity (the table says which "
+        "and why), so no error against a limit is given. The table also gives, per knob, "
+        "the base's error against that knob's own limit (the other knobs at the base), and "
+        "the base's error against the reference (every knob at its finest level: a measured "
+        "difference, not a limit).",
+    ]
+    for cond in conditions:
+        for q, name, _ in QUANTITIES:
+            text.append(f"{cond}, {name}: {_cell(table[cond][q])}.")
+    sec: dict[str, Any] = {
+        "id": "base-vs-limit",
+        "title": "The base setting against the limit",
+        "text": text,
+        "figures": [],
+        "tables": [
+            {
+                "path": "tables/fidelity_base_vs_limit.csv",
+                "caption": "the base against the limit: all knobs and each knob, per case "
+                "and quantity (limit and uncertainty in the quantity's unit, errors in %)",
+            }
+        ],
+    }
+    captions = [
+        "every setting's error against the extrapolated limit of every knob vs its compute "
+        "time; the base per case with the limit's uncertainty",
+        "the base's error against each knob's own limit per case, with that limit's "
+        "uncertainty (crosses: not asymptotic, no error)",
+    ]
+    for fig, cap in zip(figures, captions, strict=False):
+        sec["figures"].append({"path": str(fig.relative_to(out)), "caption": cap})
+    return sec
+
+
+__all__ = ["base_section", "base_vs_limit", "rows"]
