@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from workbench.contact.march import march
 from workbench.hbm.core.balance import HarmonicBalance
 from workbench.hbm.core.fourier import Fourier
 from workbench.hbm.forced.response import frequency_response
@@ -109,3 +110,52 @@ def test_stuck_locked_in_force_is_the_slow_run_ups_limit(hbm):
     assert c[0] > c[1] > c_lim
     assert c_lim == pytest.approx(h.locked[0, 0], rel=0.03)
     assert m_lim == pytest.approx(h.mean[0], rel=0.03)
+
+
+def _planar(law: str):
+    """The two-DOF example with a second tangential direction: x and y on the ground, z normal.
+
+    ky = 4.4e4 N/m (kx 4e4), kyz = 1e4 N/m; the force on y lags the one on x
+    by 90 deg (0.7 of it), so the tangential motion is an ellipse and a
+    two-dimensional law (circular) can lock in a force in any direction.
+    """
+    from workbench.contact import ContactElements
+    from workbench.hbm.core.system import System
+
+    K = np.array([[4e4, 0.0, 2e4], [0.0, 4.4e4, 1e4], [2e4, 1e4, 8e4]])
+    el = ContactElements.from_dofs(3, [[0, 1, 2]], mu=0.3, kt=1e5, kn=2e5, n0=5.0, law=law)
+    return System(M=np.eye(3) * 0.1, K=K, zeta=0.01, contacts=el), np.array([1.0, 0.7j, 0.0])
+
+
+def test_circular_law_growth_against_a_run_up():
+    """Circular law, planar model at 0.5 N and 209 Hz: stuck all period with a locked-in force.
+
+    The march's rule decides the locked-in force; a run-up from rest with the
+    force ramped in over 1000 periods (256 steps each) gives the physical
+    one, [0.2025, -0.0296] N (its last period, the law replayed from the
+    state before it). Marching the run-up's own motion (a) from rest,
+    growth 0, gives forces within 2.2e-3 N of the run-up's, (b) with the
+    law's 32 growth periods, within 2.3e-2 N (mu N0 = 1.5 N); harmonic
+    balance residuals of the run-up's harmonics 1.1e-3 and 9.0e-3. With
+    ramps of 3000 / 10000 periods: 5.2e-3 / 8.7e-3 N against 2.8e-2 /
+    3.1e-2 N (the run-up's locked-in force still drifts with the ramp,
+    t2 -0.030 / -0.036 / -0.039 N). Asserted: growth 0 within 5e-3 N,
+    growth 32 within 4e-2 N and at least 3 times farther (measured 10.8).
+    """
+    system, f1 = _planar("circular")
+    f_hz = 209.0
+    r = runup_state(system, f1, 0.5, f_hz, [0, 1, 2], ramp_periods=1000, steps_per_period=256)
+    assert r.n_slip[0] == 0 and r.locked_spread[0].max() < 1e-12
+    assert r.locked[0] == pytest.approx([0.2025, -0.0296], abs=5e-4)
+    el = system.contacts
+    fo = Fourier(H, r.u.shape[1])
+    err = {}
+    for g in (0, 32):
+        out = march(
+            r.u, fo.E, fo.P, el.mu, el.kt1, el.kt2, el.kn, el.n0, "circular", False,
+            active=el.active, lp=el.lp, growth=g,
+        )  # fmt: skip
+        err[g] = np.abs(out["f"][..., :2] - r.f[..., :2]).max()
+    assert err[0] < 5e-3
+    assert err[32] < 4e-2
+    assert err[32] > 3 * err[0]

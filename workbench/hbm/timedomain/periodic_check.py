@@ -176,7 +176,8 @@ def replay(law, el, u: np.ndarray, s0: np.ndarray) -> tuple[np.ndarray, np.ndarr
 def residual_of(hb: HarmonicBalance, u: np.ndarray, freq_hz: float, growth: int | None = None):
     """The harmonic balance residual at the harmonics of contact samples ``u`` (n_el, nt, 3).
 
-    ``u`` in the harmonic balance's sample order (sample ``k`` at ``k T / nt``).
+    ``u`` in the harmonic balance's sample order (sample ``k`` at ``k T / nt``;
+    a multiple of ``nt`` samples is thinned to ``nt``).
     ``growth``: the march's growth periods (default: the law's, as the
     harmonic balance's own contact march). Returns
     ``(|r| / |x|, x)`` with ``x`` the unknowns (condensed space: the active
@@ -185,6 +186,10 @@ def residual_of(hb: HarmonicBalance, u: np.ndarray, freq_hz: float, growth: int 
     if hb.space != "condensed":
         raise SolveError("residual_of needs the condensed space (contact DOFs as unknowns)")
     f = hb.fourier
+    if u.shape[1] != f.nt:
+        if u.shape[1] % f.nt:
+            raise SolveError(f"{u.shape[1]} samples per period: not a multiple of nt = {f.nt}")
+        u = u[:, :: u.shape[1] // f.nt]
     U = (f.P @ u.transpose(1, 0, 2).reshape(u.shape[1], -1)).reshape(f.nh, -1)
     x = U[:, hb.act].ravel()
     w = 2.0 * np.pi * freq_hz

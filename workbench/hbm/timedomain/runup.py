@@ -117,7 +117,7 @@ def _runup_py(
                                 J[:, 3 * e + bb] += G[:, 3 * e + aa] * kab
                 du = np.linalg.solve(J, -res)
                 u = u + du
-                if np.abs(du).max() <= 1e-11 * (np.abs(u).max() + 1e-300):
+                if np.abs(du).max() <= 1e-11 * (max(np.abs(u).max(), np.abs(ul).max()) + 1e-300):
                     ok = True
                     break
             if not ok:
@@ -140,7 +140,9 @@ def _runup_py(
                                 if kab != 0.0:
                                     J[:, 3 * e + bb] += G[:, 3 * e + aa] * kab
                     du = np.linalg.solve(J, -res)
-                    if np.abs(du).max() <= 1e-11 * (np.abs(u).max() + 1e-300):
+                    if np.abs(du).max() <= 1e-11 * (
+                        max(np.abs(u).max(), np.abs(ul).max()) + 1e-300
+                    ):
                         u = u + du
                         ok = True
                         break
