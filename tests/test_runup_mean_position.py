@@ -20,7 +20,7 @@ from workbench.contact.march import march
 from workbench.hbm.core.balance import HarmonicBalance
 from workbench.hbm.core.fourier import Fourier
 from workbench.hbm.forced.response import frequency_response
-from workbench.hbm.io.examples import two_dof_contact
+from workbench.hbm.io.examples import planar_contact, two_dof_contact
 from workbench.hbm.timedomain.periodic_check import hbm_state, runup_state, solve_hbm
 
 H = (0, 1, 2, 3, 4, 5)
@@ -112,21 +112,6 @@ def test_stuck_locked_in_force_is_the_slow_run_ups_limit(hbm):
     assert m_lim == pytest.approx(h.mean[0], rel=0.03)
 
 
-def _planar(law: str):
-    """The two-DOF example with a second tangential direction: x and y on the ground, z normal.
-
-    ky = 4.4e4 N/m (kx 4e4), kyz = 1e4 N/m; the force on y lags the one on x
-    by 90 deg (0.7 of it), so the tangential motion is an ellipse and a
-    two-dimensional law (circular) can lock in a force in any direction.
-    """
-    from workbench.contact import ContactElements
-    from workbench.hbm.core.system import System
-
-    K = np.array([[4e4, 0.0, 2e4], [0.0, 4.4e4, 1e4], [2e4, 1e4, 8e4]])
-    el = ContactElements.from_dofs(3, [[0, 1, 2]], mu=0.3, kt=1e5, kn=2e5, n0=5.0, law=law)
-    return System(M=np.eye(3) * 0.1, K=K, zeta=0.01, contacts=el), np.array([1.0, 0.7j, 0.0])
-
-
 def test_circular_law_growth_against_a_run_up():
     """Circular law, planar model at 0.5 N and 209 Hz: stuck all period with a locked-in force.
 
@@ -142,7 +127,8 @@ def test_circular_law_growth_against_a_run_up():
     t2 -0.030 / -0.036 / -0.039 N). Asserted: growth 0 within 5e-3 N,
     growth 32 within 4e-2 N and at least 3 times farther (measured 10.8).
     """
-    system, f1 = _planar("circular")
+    ex = planar_contact("circular")
+    system, f1 = ex.system, ex.f1
     f_hz = 209.0
     r = runup_state(system, f1, 0.5, f_hz, [0, 1, 2], ramp_periods=1000, steps_per_period=256)
     assert r.n_slip[0] == 0 and r.locked_spread[0].max() < 1e-12

@@ -4,8 +4,8 @@ A stuck friction element's locked-in force is not fixed by the periodic
 equations; the contact march picks it by a history rule
 (:mod:`workbench.contact.march`). This module checks that rule against the
 history a real vibration has: a run-up from the preload state
-(:func:`.runup.runup`), the excitation ramped in, integrated until its
-periods repeat. It compares, at one frequency,
+(:func:`.runup.runup`), the excitation switched on or ramped in,
+integrated until its periods repeat. It compares, at one frequency,
 
 * the output's harmonic-0 (mean) and harmonic-1 amplitude;
 * each element's mean tangential force and locked-in force
@@ -14,8 +14,8 @@ periods repeat. It compares, at one frequency,
   given march rule (``growth``): how far the run-up's periodic state is
   from a solution of the harmonic balance equations.
 
-Used by ``benchmarks/runup_two_dof.py`` and ``tests/test_runup_mean_position.py``;
-see docs/notes/mean_position.md.
+Used by ``benchmarks/runup_mean_position.py`` and
+``tests/test_runup_mean_position.py``; see docs/notes/mean_position.md.
 """
 
 from __future__ import annotations
