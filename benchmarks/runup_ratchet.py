@@ -16,6 +16,13 @@ harmonic balance's values as lines. It prints the numbers quoted in
 docs/FINDINGS.md. A run can be continued (``--continue``) from the state it
 saved.
 
+Check the time step: at 30 N (mu 0.3, 9 mm mesh, 408.05 Hz) the cylinder's
+run-up with 128 steps per period leaves the harmonic balance state after 15
+periods for one at 0.223 mm, and with 256 steps after 140 periods for a
+modulated one; with 512 steps it stays (0.3001 mm, mean -0.0900 mm, 360
+periods). At 9.6 N with mu 0.5 the locked state is the same at 128 and 512
+steps (docs/notes/mean_position.md).
+
     .venv/bin/python benchmarks/runup_ratchet.py --damper cylinder --force 9.6 \\
         --mu 0.5 --cf 10000 --periods 500 --out results/runup   # ratchets and locks
     .venv/bin/python benchmarks/runup_ratchet.py --periods 300 --out results/runup  # mu 0.3: slips

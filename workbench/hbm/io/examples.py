@@ -9,6 +9,8 @@
 * :func:`two_dof_contact`: a point mass moving in a plane (x tangential, z
   normal) with coupled springs, touching the ground through a 3-D element:
   tangential motion changes the normal load;
+* :func:`planar_contact`: the same with a second tangential direction
+  (an elliptical tangential motion, for two-dimensional friction laws);
 * :func:`line_damper_rig`: a synthetic two-blade rig with a free-free
   damper held by ``2 n_per_line`` contact pairs on two lines, of the size
   of the cone (23 per line) or wedge (73 per line) models of the study of
@@ -148,6 +150,29 @@ def two_dof_contact(
         ("x", "z"),
         (80.0, 220.0),
         (0.5, 1.0, 2.0, 3.0),
+    )
+
+
+def planar_contact(law: str = "decoupled", level_y: float = 0.7) -> ExampleModel:
+    """The two-DOF example with a second tangential direction (x, y tangential, z normal).
+
+    As :func:`two_dof_contact` (m 0.1 kg, kx 4e4, kz 8e4, kxz 2e4 N/m, the
+    same element) plus y: ky 4.4e4 N/m, kyz 1e4 N/m. The force on y lags
+    the one on x by 90 deg with ``level_y`` of its size, so the tangential
+    motion is an ellipse and a two-dimensional law (circular) can lock in
+    a force in any direction. Used to check the contact march's history
+    rule against run-ups (docs/notes/mean_position.md).
+    """
+    K = np.array([[4.0e4, 0.0, 2.0e4], [0.0, 4.4e4, 1.0e4], [2.0e4, 1.0e4, 8.0e4]])
+    el = ContactElements.from_dofs(3, [[0, 1, 2]], mu=0.3, kt=1.0e5, kn=2.0e5, n0=5.0, law=law)
+    sysm = System(M=np.eye(3) * 0.1, K=K, zeta=0.01, contacts=el, dof_names=("x", "y", "z"))
+    return ExampleModel(
+        sysm,
+        np.array([1.0 + 0j, level_y * 1j, 0.0]),
+        np.array([0, 1, 2]),
+        ("x", "y", "z"),
+        (120.0, 230.0),
+        (0.5,),
     )
 
 

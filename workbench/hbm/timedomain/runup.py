@@ -18,7 +18,10 @@ Newmark's average-acceleration rule with a fixed step ``T / steps_per_period``
 
 (``r`` the Newmark right-hand side, ``f`` the contact law of
 :mod:`workbench.contact.laws`, the same ``step`` the harmonic balance
-marches) by Newton's method on ``3 n_pairs`` unknowns with the law's tangent;
+marches) by Newton's method on ``3 n_pairs`` unknowns with the law's tangent (when
+it does not converge in 60 iterations, again from the last step's state
+with the step halved until the residual falls: near a slip threshold the
+plain iteration can cycle between stick and slip);
 then ``q = Kh^-1 r - A^T f``. A step whose Newton does not converge stops
 the run (:class:`SolveError` with what was computed as ``partial``).
 
@@ -54,6 +57,7 @@ class RunUp:
     slip_samples: np.ndarray  # (n_periods,) samples x pairs slipping in the period
     sep_samples: np.ndarray  # (n_periods,) samples x pairs separated in the period
     state: dict  # end state {q, v, a, law}: pass as ``start`` to continue
+    last: np.ndarray | None = None  # (steps_per_period, n_out) outputs over the last period, m
 
     @property
     def n_periods(self) -> int:
@@ -113,9 +117,47 @@ def _runup_py(
                                 J[:, 3 * e + bb] += G[:, 3 * e + aa] * kab
                 du = np.linalg.solve(J, -res)
                 u = u + du
-                if np.abs(du).max() <= 1e-11 * (np.abs(u).max() + 1e-300):
+                if np.abs(du).max() <= 1e-11 * (max(np.abs(u).max(), np.abs(ul).max()) + 1e-300):
                     ok = True
                     break
+            if not ok:
+                # the plain iteration can cycle between stick and slip near a threshold:
+                # again from the last step's state, with the step halved until |res| falls
+                u = Wd @ q
+                for _ in range(200):
+                    uu = u.reshape(n_el, 3)
+                    for e in range(n_el):
+                        step(uu[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], lp[e], True,
+                             f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
+                    res = u - ul + G @ f.ravel()
+                    J[:, :] = 0.0
+                    for i in range(m):
+                        J[i, i] = 1.0
+                    for e in range(n_el):
+                        for aa in range(3):
+                            for bb in range(3):
+                                kab = Kt[e, aa, bb]
+                                if kab != 0.0:
+                                    J[:, 3 * e + bb] += G[:, 3 * e + aa] * kab
+                    du = np.linalg.solve(J, -res)
+                    if np.abs(du).max() <= 1e-11 * (
+                        max(np.abs(u).max(), np.abs(ul).max()) + 1e-300
+                    ):
+                        u = u + du
+                        ok = True
+                        break
+                    rn = np.linalg.norm(res)
+                    lam = 1.0
+                    for _b in range(40):
+                        ut = u + lam * du
+                        ut3 = ut.reshape(n_el, 3)
+                        for e in range(n_el):
+                            step(ut3[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], lp[e],
+                                 False, f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
+                        if np.linalg.norm(ut - ul + G @ f.ravel()) < rn:
+                            break
+                        lam *= 0.5
+                    u = ut
             if not ok:
                 return p
             uu = u.reshape(n_el, 3)
@@ -244,4 +286,5 @@ def _record(freq, level, ys, ns_, sl, sp_, n0, q, v, a, state, law, periods) -> 
         state=dict(
             q=q.copy(), v=v.copy(), a=a.copy(), s=state.copy(), law=law.name, periods=periods
         ),
+        last=y[-1].copy() if y.shape[0] else None,
     )
