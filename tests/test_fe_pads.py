@@ -115,9 +115,10 @@ def test_free_block_with_pads_keeps_six_rigid_modes(tmp_path):
     assert lam[6] > 0
 
 
-@pytest.mark.parametrize("width", [0.0])
-def test_no_pad_no_members(width):
-    out = pad_members(np.zeros((4, 3)), np.zeros((1, 3)), np.eye(3)[None], np.ones(1), "line", width)
+def test_no_pad_no_members():
+    """Width 0: no pad, the contact node alone (the default)."""
+    coords = np.zeros((4, 3))
+    out = pad_members(coords, np.zeros((1, 3)), np.eye(3)[None], np.ones(1), "line", 0.0)
     assert len(out) == 1 and len(out[0]) == 0
 
 

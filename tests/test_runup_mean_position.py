@@ -119,8 +119,8 @@ def test_circular_law_growth_against_a_run_up():
     force ramped in over 1000 periods (256 steps each) gives the physical
     one, [0.2025, -0.0296] N (its last period, the law replayed from the
     state before it). Marching the run-up's own motion (a) from rest,
-    growth 0, gives forces within 2.2e-3 N of the run-up's, (b) with the
-    law's 32 growth periods, within 2.3e-2 N (mu N0 = 1.5 N); harmonic
+    growth 0 (the law's rule), gives forces within 2.2e-3 N of the run-up's,
+    (b) with 32 growth periods, within 2.3e-2 N (mu N0 = 1.5 N); harmonic
     balance residuals of the run-up's harmonics 1.1e-3 and 9.0e-3. With
     ramps of 3000 / 10000 periods: 5.2e-3 / 8.7e-3 N against 2.8e-2 /
     3.1e-2 N (the run-up's locked-in force still drifts with the ramp,

@@ -13,19 +13,19 @@ rule through every sample of every period marched,
     df_j/dU = Fu E_j + Fs ds_{j-1}/dU,   ds_j/dU = Su E_j + Ss ds_{j-1}/dU.
 
 Where the periodic state is not unique (a stuck element can carry any
-locked-in force its slip limit admits over the whole period), the march's
-start picks it. From rest, the decoupled law (and any law whose tangential
-axes are independent one-dimensional Jenkins elements) reaches, per axis,
-the admissible locked-in force nearest to zero: exactly the state that a
-vibration growing slowly from the preload state reaches (a growth over any
-number of periods changes nothing, to round-off, and the state does not
-depend on which sample starts the period: ``tests/test_march_history.py``).
-A law whose state does depend on the start (the circular law: a slip in
-one direction leaves the other free) declares ``GROWTH_PERIODS``: the
-march first grows the motion from rest, sample ``j`` of growth period
-``p`` scaled by ``(p nt + j + 1) / (GROWTH_PERIODS nt)``, then marches the
-periodic motion until it repeats. The derivative chains through the growth
-too (its samples are ``r E_j U``).
+locked-in force its slip limit admits over the whole period), the start
+picks it. From rest, the decoupled law (and any law whose tangential axes
+are independent one-dimensional Jenkins elements) reaches, per axis, the
+admissible locked-in force nearest to zero: exactly the state that a
+vibration growing slowly from the preload state reaches. A proportional
+growth of the motion from rest over any number of periods first
+(``growth``: sample ``j`` of growth period ``p`` scaled by
+``(p nt + j + 1) / (growth nt)``, the derivative chained through) changes
+nothing, to round-off, and the state does not depend on which sample
+starts the period (``tests/test_march_history.py``). For the circular law
+the start does matter; ``growth`` removes that, but a ramped run-up agrees
+better with the march from rest (docs/notes/mean_position.md), so every
+law marches from rest and ``growth`` serves the checks.
 
 The march is compiled once per law (:func:`specialise`: the law's ``step``
 is a global of its own copy of the kernel, cached on disk by numba under
@@ -50,16 +50,16 @@ MAX_PERIODS = 200
 _warned: set[str] = set()
 
 
-def specialise(py_func, law: Law, prefix: str, growth: int | None = None):
+def specialise(py_func, law: Law, prefix: str, growth: int = 0):
     """A numba-compiled copy of ``py_func`` whose global ``step`` is ``law.step``.
 
     Each law gets its own function object; ``py_func`` refers to the
-    law only through the global names ``step`` and ``growth`` (the law's
-    growth periods, or ``growth`` when given), named ``<prefix>_<law>_g<growth>``
-    (so numba caches one compiled kernel per law and growth on disk).
-    Memoised per (function, law, growth).
+    law only through the global names ``step`` and ``growth`` (periods of
+    growth from rest), named ``<prefix>_<law>_g<growth>`` (so numba caches one
+    compiled kernel per law and growth on disk). Memoised per (function, law,
+    growth).
     """
-    own = law.growth_periods if growth is None else int(growth)
+    own = int(growth)
     key = (py_func.__qualname__, law.name, own)
     if key not in _kernels:
         from numba import njit
@@ -68,7 +68,7 @@ def specialise(py_func, law: Law, prefix: str, growth: int | None = None):
         g["step"] = law.step
         g["growth"] = own
         # the growth in the name: numba's disk cache takes globals as constants and would
-        # not notice a law's GROWTH_PERIODS changing
+        # not tell two growths apart
         name = f"{prefix}_{law.name}_g{own}"
         fn = types.FunctionType(py_func.__code__, g, name, py_func.__defaults__)
         fn.__qualname__ = name
@@ -78,7 +78,7 @@ def specialise(py_func, law: Law, prefix: str, growth: int | None = None):
 
 _kernels: dict = {}
 step = None  # the law's step: bound per law by specialise()
-growth = 0  # the law's growth periods (Law.growth_periods): bound per law by specialise()
+growth = 0  # periods of growth from rest: bound per kernel by specialise()
 
 
 def _march_py(
@@ -120,7 +120,7 @@ def _march_py(
         lpe = lp[e]  # the element's values of the law's own parameters
         p = 0
         same = False
-        # the law's growth periods first (r < 1: the motion grows from rest, nothing is
+        # the growth periods first (r < 1: the motion grows from rest, nothing is
         # recorded), then the periodic march (r = 1) until the state repeats
         while p < growth + max_periods:
             growing = p < growth
@@ -250,12 +250,12 @@ def march(
     max_periods: int = MAX_PERIODS,
     active: np.ndarray | None = None,
     lp: np.ndarray | None = None,
-    growth: int | None = None,
+    growth: int = 0,
 ) -> dict[str, np.ndarray]:
     """March ``law`` over periods of samples ``u`` (n_el, nt, 3) in metres until it repeats.
 
-    ``growth``: periods over which the motion first grows from rest (default:
-    the law's ``growth_periods``; see the module docstring).
+    ``growth``: periods over which the motion first grows from rest (default 0:
+    the march from rest; see the module docstring).
 
     ``lp`` (n_el, n_own): each element's values of the law's own parameters
     (:func:`law_param_array`; default: their declared defaults).
@@ -293,7 +293,7 @@ def march(
         if active is None
         else np.ascontiguousarray(active, dtype=np.bool_)
     )
-    if growth is not None and int(growth) < 0:
+    if int(growth) < 0:
         raise InputError("growth", growth, "an integer >= 0 (periods of growth from rest)")
     specialise(_march_py, lw, "_march", growth)(
         lw.n_state, u,

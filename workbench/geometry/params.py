@@ -137,8 +137,7 @@ class MeshSizes:
     )
     pad_mm: float = param(
         0.0,
-        "width of the pad tied to each contact point (workbench/fe/pads.py); 0: the node "
-        "alone, mm",
+        "width of the pad tied to each contact point (workbench/fe/pads.py); 0: the node alone, mm",
         lo=0.0,
     )
     refine_distance_mm: float = param(

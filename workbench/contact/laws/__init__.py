@@ -4,10 +4,6 @@ A law is a module of this package that defines
 
 * ``NAME`` (str): the name used in model files (``law = "..."``);
 * ``N_STATE`` (int): the size of its history state ``s`` per element;
-* ``GROWTH_PERIODS`` (int, optional, default 0): periods over which the
-  march first grows the motion from rest, for a law whose periodic state
-  would otherwise depend on where the period starts (see
-  :mod:`workbench.contact.march`);
 * ``step`` (numba ``njit``): one time sample of one element,
 
   ``step(u, s, mu, kt1, kt2, kn, n0, lp, want_jac, f, s_new, Fu, Fs, Su, Ss) -> flag``
@@ -62,7 +58,6 @@ class Law:
     n_state: int
     summary: str
     module_name: str
-    growth_periods: int = 0
     _mod: list = field(default_factory=list, repr=False, compare=False)
 
     @property
@@ -84,7 +79,7 @@ def _constants(path: Path) -> tuple[dict[str, object], str]:
     for node in tree.body:
         if isinstance(node, ast.Assign) and len(node.targets) == 1:
             t = node.targets[0]
-            if isinstance(t, ast.Name) and t.id in ("NAME", "N_STATE", "GROWTH_PERIODS"):
+            if isinstance(t, ast.Name) and t.id in ("NAME", "N_STATE"):
                 out[t.id] = ast.literal_eval(node.value)
     return out, ast.get_docstring(tree) or ""
 
@@ -99,13 +94,7 @@ def _discover() -> dict[str, Law]:
         if "NAME" not in const or "N_STATE" not in const:
             raise ImportError(f"contact law module {path.name} must define NAME and N_STATE")
         lines = doc.strip().splitlines()
-        law = Law(
-            str(const["NAME"]),
-            int(const["N_STATE"]),
-            lines[0] if lines else "",
-            path.stem,
-            int(const.get("GROWTH_PERIODS", 0)),
-        )
+        law = Law(str(const["NAME"]), int(const["N_STATE"]), lines[0] if lines else "", path.stem)
         found[law.name] = law
     return found
 

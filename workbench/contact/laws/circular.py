@@ -5,18 +5,15 @@ State ``s = [T1, T2, u1, u2]`` as for the decoupled law; the trial force
 ``|T| = mu N`` when it lies outside (radial return). Unlike the decoupled
 law its loop can take many periods to settle near the slip threshold.
 
-Its periodic state also depends on the history: a loop that slips in one
-tangential direction leaves the other free, so from rest the state the
-march settles in depends on where the period starts (on 2000 random
-periodic motions, up to 0.51 mu N0 in the force; up to 0.74 mu N0 on
-motions that stay stuck with a large mean). The march therefore first
-grows the motion from rest over ``GROWTH_PERIODS`` periods
-(:mod:`workbench.contact.march`): the state a slowly built-up vibration
-reaches. The start's influence falls as about 1 / growth: with 8 / 32 /
-128 periods it is 5.1e-2 / 6.3e-3 / 4.2e-4 mu N0 on the first set and
-0.14 / 7.3e-2 / 1.7e-2 mu N0 on the second (``tests/test_march_history.py``).
-32 periods cost about ten times the plain march; the decoupled law, the
-default, needs none.
+Its periodic state can depend on where the period starts: a loop that
+slips in one tangential direction leaves the other free (on 2000 random
+periodic motions the start moved the force by up to 0.51 mu N0; 0.74 on
+stuck motions with a large mean; ``tests/test_march_history.py``). A
+proportional growth of the motion from rest before the periodic march
+(``growth`` of :func:`workbench.contact.march.march`) removes that, about
+as 1 / growth, but against a slowly ramped run-up the march from rest is
+3.5-10 times closer (docs/notes/mean_position.md), so the march from rest
+stays this law's rule and its results carry that dependence.
 """
 
 from __future__ import annotations
@@ -29,7 +26,6 @@ from ._common import begin
 
 NAME = "circular"
 N_STATE = 4
-GROWTH_PERIODS = 32
 
 
 @njit(cache=True)

@@ -86,7 +86,6 @@ def build(force: bool = False) -> Path | None:
         g = dict(vars(K))
         mg = dict(_march_py.__globals__)
         mg["step"] = law.step
-        mg["growth"] = law.growth_periods
         g["march"] = njit(types.FunctionType(_march_py.__code__, mg, f"_march_aot_{law_name}"))
         for name in names:
             f = getattr(K, name)

@@ -173,13 +173,13 @@ def replay(law, el, u: np.ndarray, s0: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return f, n_slip
 
 
-def residual_of(hb: HarmonicBalance, u: np.ndarray, freq_hz: float, growth: int | None = None):
+def residual_of(hb: HarmonicBalance, u: np.ndarray, freq_hz: float, growth: int = 0):
     """The harmonic balance residual at the harmonics of contact samples ``u`` (n_el, nt, 3).
 
     ``u`` in the harmonic balance's sample order (sample ``k`` at ``k T / nt``;
     a multiple of ``nt`` samples is thinned to ``nt``).
-    ``growth``: the march's growth periods (default: the law's, as the
-    harmonic balance's own contact march). Returns
+    ``growth``: the march's growth periods (default 0, the harmonic
+    balance's own contact march: from rest). Returns
     ``(|r| / |x|, x)`` with ``x`` the unknowns (condensed space: the active
     contact DOFs' harmonics).
     """
