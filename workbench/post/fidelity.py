@@ -198,7 +198,9 @@ def is_ladder(knob: str, lad: list[Setting]) -> bool:
     return all(knob_h(knob, st.values[knob]) is not None for st in lad)
 
 
-def _value(st: Setting, cond: str, q: str) -> float | None:
+def setting_value(st: Setting, cond: str, q: str) -> float | None:
+    """Quantity ``q`` of setting ``st`` at condition ``cond``; None if missing, failed or
+    not finite."""
     r = st.results.get(cond)
     if r is None or r.branch.failed:
         return None
@@ -233,7 +235,7 @@ def ladder_limits(
         for cond in lad[-1].results:
             out[knob][cond] = {}
             for q, _, _ in QUANTITIES:
-                vals = [_value(st, cond, q) for st in lad]
+                vals = [setting_value(st, cond, q) for st in lad]
                 if (knob, cond) in skip:
                     v = vals[-1]
                     est = LimitEstimate(
@@ -268,7 +270,7 @@ def combined_limits(
     for cond in ref.results:
         out[cond] = {}
         for q, _, _ in QUANTITIES:
-            v = _value(ref, cond, q)
+            v = setting_value(ref, cond, q)
             unc: float | None = 0.0
             asym, why = v is not None, [] if v is not None else ["no reference value"]
             orders: dict[str, float | None] = {}
@@ -283,7 +285,7 @@ def combined_limits(
                     asym, unc = False, None
                     why.append(f"{knob}: the base is finer than its levels")
                     continue
-                if est is not None and est.finest != _value(lad[-1], cond, q):
+                if est is not None and est.finest != setting_value(lad[-1], cond, q):
                     est = None  # the finest level failed: its correction has no anchor
                 if est is None or not est.asymptotic:
                     asym, unc = False, None
@@ -309,7 +311,7 @@ def limit_errors(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) ->
     for cond in st.results:
         out[cond] = {}
         for q, _, _ in QUANTITIES:
-            a, lim = _value(st, cond, q), combined.get(cond, {}).get(q, {}).get("value")
+            a, lim = setting_value(st, cond, q), combined.get(cond, {}).get(q, {}).get("value")
             _relative(a, lim, out[cond], q)
     return out
 

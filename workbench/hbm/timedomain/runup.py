@@ -37,6 +37,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ...contact import get_law
 from ...contact.march import specialise
@@ -65,6 +66,21 @@ class RunUp:
 
 
 step = None  # the law's step: bound per law by contact.march.specialise
+
+
+@njit(cache=True)
+def _newton_matrix(J, G, Kt):
+    """``J = I + G Kt`` in place: the Jacobian of the contact residual ``u - ul + G f(u)``
+    (``Kt`` (n_el, 3, 3): each element's ``df/du``)."""
+    J[:, :] = 0.0
+    for i in range(J.shape[0]):
+        J[i, i] = 1.0
+    for e in range(Kt.shape[0]):
+        for aa in range(3):
+            for bb in range(3):
+                kab = Kt[e, aa, bb]
+                if kab != 0.0:
+                    J[:, 3 * e + bb] += G[:, 3 * e + aa] * kab
 
 
 def _runup_py(
@@ -106,15 +122,7 @@ def _runup_py(
                     step(uu[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], lp[e], True,
                          f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
                 res = u - ul + G @ f.ravel()
-                J[:, :] = 0.0
-                for i in range(m):
-                    J[i, i] = 1.0
-                for e in range(n_el):
-                    for aa in range(3):
-                        for bb in range(3):
-                            kab = Kt[e, aa, bb]
-                            if kab != 0.0:
-                                J[:, 3 * e + bb] += G[:, 3 * e + aa] * kab
+                _newton_matrix(J, G, Kt)
                 du = np.linalg.solve(J, -res)
                 u = u + du
                 if np.abs(du).max() <= 1e-11 * (max(np.abs(u).max(), np.abs(ul).max()) + 1e-300):
@@ -130,15 +138,7 @@ def _runup_py(
                         step(uu[e], state[e], mu[e], kt1[e], kt2[e], kn[e], n0[e], lp[e], True,
                              f[e], s_new[e], Kt[e], Fs, Su, Ss)  # fmt: skip
                     res = u - ul + G @ f.ravel()
-                    J[:, :] = 0.0
-                    for i in range(m):
-                        J[i, i] = 1.0
-                    for e in range(n_el):
-                        for aa in range(3):
-                            for bb in range(3):
-                                kab = Kt[e, aa, bb]
-                                if kab != 0.0:
-                                    J[:, 3 * e + bb] += G[:, 3 * e + aa] * kab
+                    _newton_matrix(J, G, Kt)
                     du = np.linalg.solve(J, -res)
                     if np.abs(du).max() <= 1e-11 * (
                         max(np.abs(u).max(), np.abs(ul).max()) + 1e-300

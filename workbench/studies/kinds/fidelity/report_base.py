@@ -28,21 +28,13 @@ from typing import Any
 
 from ....io import write_json
 from ....io.csv_rows import write_rows_csv
-from ....post.fidelity import NOT_APPLICABLE, QUANTITIES, Setting
+from ....post.fidelity import NOT_APPLICABLE, QUANTITIES, Setting, setting_value
 
 
 def _pct(num: float | None, den: float | None) -> float | None:
     if num is None or den is None or den == 0 or not math.isfinite(num):
         return None
     return abs(num) / abs(den) * 100.0
-
-
-def _value(st: Setting, cond: str, q: str) -> float | None:
-    r = st.results.get(cond)
-    if r is None or r.branch.failed:
-        return None
-    v = r.summary().get(q)
-    return None if v is None or not math.isfinite(v) else float(v)
 
 
 def base_vs_limit(
@@ -59,7 +51,7 @@ def base_vs_limit(
     for cond in conditions:
         out[cond] = {}
         for q, _, unit in QUANTITIES:
-            v = _value(base, cond, q)
+            v = setting_value(base, cond, q)
             lim = summary["limit"].get(cond, {}).get(q, {})
             trusted = bool(lim.get("asymptotic")) and v is not None
             knobs: dict[str, Any] = {}
