@@ -28,7 +28,37 @@ from ..core.system import System
 TWO_PI = 2.0 * np.pi
 
 
-class Epmc:
+class EpmcHooks:
+    """The hooks the backbone's corrector and loop call, shared by every EPMC form.
+
+    The unknowns are ``[x (N), w, xi]``: ``N + 2`` of them, ``w`` and ``xi``
+    scaled by the linear frequency ``w_lin``. A form whose residual rows are
+    forces scales them by ``w_lin^2`` times its largest modal mass
+    (:meth:`_force_rows`).
+    """
+
+    N: int
+    w_lin: float
+
+    @property
+    def n_unknowns(self) -> int:
+        return self.N + 2
+
+    def var_scale(self) -> np.ndarray:
+        """Scale of each unknown (x as it is; w and xi by the linear frequency)."""
+        sc = np.ones(self.N + 2)
+        sc[self.N :] = self.w_lin
+        return sc
+
+    def _force_rows(self, M: np.ndarray) -> np.ndarray:
+        """Row scales for force residuals with the mass matrix ``M`` (the two condition
+        rows as they are)."""
+        rs = np.ones(self.N + 2)
+        rs[: self.N] = 1.0 / (self.w_lin**2 * max(np.abs(np.diag(M)).max(), 1e-300))
+        return rs
+
+
+class Epmc(EpmcHooks):
     """Residual and Jacobian of the extended periodic motion concept for one linear mode."""
 
     def __init__(
@@ -224,21 +254,9 @@ class Epmc:
         J[N + 1, (c + 1) * n : (c + 2) * n] = self.Mphi
         return r, res, J
 
-    # hooks shared with the condensed form (the corrector and the loop see only these)
-    @property
-    def n_unknowns(self) -> int:
-        return self.N + 2
-
-    def var_scale(self) -> np.ndarray:
-        """Scale of each unknown (psi as it is; w and xi by the linear frequency)."""
-        sc = np.ones(self.N + 2)
-        sc[self.N :] = self.w_lin
-        return sc
-
+    # hooks (with EpmcHooks'): the corrector and the loop see only these
     def row_scale(self) -> np.ndarray:
-        rs = np.ones(self.N + 2)
-        rs[: self.N] = 1.0 / (self.w_lin**2 * max(np.abs(np.diag(self.M)).max(), 1e-300))
-        return rs
+        return self._force_rows(self.M)
 
     def dc_mask(self) -> np.ndarray:
         m = np.zeros(self.N + 2, bool)

@@ -14,10 +14,10 @@ import scipy.sparse as sp
 
 from ..core.fourier import Fourier
 from ..core.system import System
-from .epmc import Epmc
+from .epmc import Epmc, EpmcHooks
 
 
-class EpmcCondensed:
+class EpmcCondensed(EpmcHooks):
     """The same problem on the contact displacements and the followed mode (modal damping).
 
     With the mass-normalised modes ``Phi`` of ``(K_r, M)`` diagonalising
@@ -78,16 +78,7 @@ class EpmcCondensed:
         self.mask_other = np.ones(Phi.shape[1])
         self.mask_other[mode] = 0.0
 
-    # hooks ----------------------------------------------------------------------------
-    @property
-    def n_unknowns(self) -> int:
-        return self.N + 2
-
-    def var_scale(self) -> np.ndarray:
-        sc = np.ones(self.N + 2)
-        sc[self.N :] = self.w_lin
-        return sc
-
+    # hooks (with EpmcHooks') ----------------------------------------------------------
     def row_scale(self) -> np.ndarray:
         return np.ones(self.N + 2)
 

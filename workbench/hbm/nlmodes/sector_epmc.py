@@ -47,14 +47,14 @@ from ..core.loops import loop_dissipation
 from ..core.sector import SectorBalance, SectorModel
 from ..path.engine import follow
 from ..path.step import StepRule
-from .epmc import TWO_PI
+from .epmc import TWO_PI, EpmcHooks
 from .problem import Backbone, BackboneCorrector
 from .record import NlModeBranch
 
 __all__ = ["SectorEpmc", "sector_nonlinear_mode"]
 
 
-class SectorEpmc:
+class SectorEpmc(EpmcHooks):
     """Residual and analytic Jacobian of the EPMC on one sector (the PathProblem side of
     :class:`.problem.Backbone`, as :class:`.epmc.Epmc`)."""
 
@@ -140,19 +140,8 @@ class SectorEpmc:
         J[N + 1, self.sl1] = self.phase_row
         return r, res, J
 
-    @property
-    def n_unknowns(self) -> int:
-        return self.N + 2
-
-    def var_scale(self) -> np.ndarray:
-        sc = np.ones(self.N + 2)
-        sc[self.N :] = self.w_lin
-        return sc
-
     def row_scale(self) -> np.ndarray:
-        rs = np.ones(self.N + 2)
-        rs[: self.N] = 1.0 / (self.w_lin**2 * max(np.abs(np.diag(self.M1)).max(), 1e-300))
-        return rs
+        return self._force_rows(self.M1)
 
     def dc_mask(self) -> np.ndarray:
         m = np.zeros(self.N + 2, bool)
