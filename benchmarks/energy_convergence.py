@@ -368,17 +368,12 @@ def _pad_limits(case: str, rows: list) -> None:
     from workbench.post.extrapolation import richardson
 
     rows = [(h, r) for h, r in rows if r]
-    for q, name in (("energy", "E"), ("amp", "A"), ("freq", "f")):
-        vals = [
-            r[f"{q}_v_" + ("mj" if q == "energy" else "mm" if q == "amp" else "hz")]
-            for _, r in rows
-        ]
-        est = richardson([h for h, _ in rows], vals)
-        base = dict(rows).get(BASE["contact-size"])
+    base = dict(rows).get(BASE["contact-size"])
+    for key, name in (("energy_v_mj", "E"), ("amp_v_mm", "A"), ("freq_v_hz", "f")):
+        est = richardson([h for h, _ in rows], [r[key] for _, r in rows])
         line = f"  {case} {name}: "
         if est.asymptotic:
-            b = base[f"{q}_v_" + ("mj" if q == "energy" else "mm" if q == "amp" else "hz")]
-            err = 100 * (b / est.value - 1)
+            err = 100 * (base[key] / est.value - 1)
             line += (
                 f"order {est.order:.2f}, limit {est.value:.4g} +- {est.uncertainty:.2g}, "
                 f"1.5 mm off by {err:+.2f} % (+- {100 * est.uncertainty / est.value:.2f} %)"
