@@ -114,8 +114,10 @@ def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
     ``nodes``: the located interface nodes (the first ``contact.n_pairs`` are the contact
     points, in ContactSet order). The pad's nodes (the contact node and those of
     :func:`pad_members`) get the penalty ``alpha`` :func:`rigid_penalty`: they move as one
-    rigid body. Each rank finds the pad nodes it owns; the lowest rank adds every pad's
-    block (PETSc's assembly sends the rows it does not own). Returns counts.
+    rigid body. Each rank finds the pad nodes it owns and every rank sees every pad; each
+    builds the penalty's rows it owns in one preallocated matrix, added to ``K`` once
+    (``K + P``: inserting the pads' new entries into ``K`` itself reallocates row after
+    row, 90 % of a reduction's time on the paper-like rig). Returns counts.
     """
     from petsc4py import PETSc
 
@@ -133,8 +135,9 @@ def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
     pos = diag[diag > 1.0]
     med = float(np.median(pos)) if len(pos) else 1.0
     alpha = ALPHA * max(comm.allgather(med))
-    K.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
     centers = nodes.global_dofs[:m] // 3
+    lo, hi = K.getOwnershipRange()
+    blocks: list[tuple[np.ndarray, np.ndarray]] = []  # (global dofs, dense block)
     n_tied = 0
     for i in range(m):
         g = np.concatenate([[centers[i, 0]]] + [e[i][0] for e in every]).astype(np.int64)
@@ -142,11 +145,37 @@ def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
         keep = np.concatenate([[True], g[1:] != g[0]])
         g, x = g[keep], x[keep]
         n_tied += len(g) - 1
-        if comm.rank != 0 or len(g) < 2:
+        if len(g) < 2:
             continue
-        rows = (3 * g[:, None] + np.arange(3)[None, :]).ravel().astype(PETSc.IntType)
-        K.setValues(rows, rows, alpha * rigid_penalty(x - x[0]), addv=PETSc.InsertMode.ADD_VALUES)
-    K.assemble()
+        rows = (3 * g[:, None] + np.arange(3)[None, :]).ravel()
+        blocks.append((rows, alpha * rigid_penalty(x - x[0])))
+    # the rows this rank owns, each with its columns summed over the pads that touch it
+    entries: dict[int, dict[int, float]] = {}
+    for rows, P in blocks:
+        for a in np.flatnonzero((rows >= lo) & (rows < hi)):
+            row = entries.setdefault(int(rows[a]), {})
+            for c, v in zip(rows.tolist(), P[a].tolist(), strict=True):
+                row[c] = row.get(c, 0.0) + v
+    if comm.allreduce(len(entries)) == 0:
+        return {"pad_nodes": n_tied, "pad_alpha": alpha, "pad_nodes_per_pair": 0.0}
+    (rl, rg), (cl, cg) = K.getSizes()
+    ptr = np.zeros(hi - lo + 1, dtype=PETSc.IntType)
+    cols: list[int] = []
+    vals: list[float] = []
+    for r in range(lo, hi):
+        row = entries.get(r, {})
+        ks = sorted(row)
+        cols.extend(ks)
+        vals.extend(row[k] for k in ks)
+        ptr[r - lo + 1] = ptr[r - lo] + len(ks)
+    P = PETSc.Mat().createAIJ(
+        ((rl, rg), (cl, cg)),
+        csr=(ptr, np.asarray(cols, dtype=PETSc.IntType), np.asarray(vals, dtype=float)),
+        comm=comm,
+    )
+    P.assemble()
+    K.axpy(1.0, P, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    P.destroy()
     return {"pad_nodes": n_tied, "pad_alpha": alpha, "pad_nodes_per_pair": n_tied / max(m, 1)}
 
 
