@@ -214,3 +214,78 @@ def test_no_error_is_relative_to_a_stuck_dampers_zero_energy():
     assert worst(e_other) == pytest.approx(5.0) == worst(e_other, "friction_energy_mj")
     other.results["slips"].branch.failed = True  # a failed case: no worst error at all
     assert worst(relative_errors(other, ref)) is None
+
+
+# ---- the production model against the pad study's limit -------------------------------------
+
+PADS = ROOT / "studies" / "fidelity_paper_rig_pads.toml"
+
+
+def test_the_pad_study_is_the_point_study_on_the_pad_rig_with_the_main_job_as_production(
+    tmp_path,
+):
+    """Same cases, base, knobs and levels as the point-contact study; its model is the pad
+    rig; the production model (the main job's rig file) is solved at the base setting: the
+    same solve, another model."""
+    from workbench.studies.kinds.fidelity.compute import _Computer
+    from workbench.studies.kinds.fidelity.ladders import plan_settings
+
+    point, pads = load_study(STUDY, {}), load_study(PADS, {})
+    assert Path(pads.geometry).name == "paper_rig_pads.toml"
+    main = load_study(ROOT / "studies" / "paper_rig.toml", {})
+    assert Path(pads.fidelity.production_geometry).resolve() == Path(main.geometry).resolve()
+    cp, cq = _Computer(point, tmp_path / "p", False), _Computer(pads, tmp_path / "q", False)
+    assert cq.names == cp.names == CASES and cq.base_values == cp.base_values
+    sp_, _ = plan_settings(point, cp.dampers)
+    sq, _ = plan_settings(pads, cq.dampers)
+    assert [s.values for s in sq] == [s.values for s in sp_]
+    prod = Setting("production", dict(sq[0].values), "production")
+    on_pads, on_main = cq.cases(sq[0]), cq.cases(prod)
+    for a, b, c in zip(on_pads, on_main, cp.cases(sp_[0]), strict=True):
+        assert a.solve_params() == b.solve_params()
+        assert a.model_digest != b.model_digest
+        assert b.model_digest == c.model_digest  # the production model is the main job's
+
+
+def test_the_production_model_is_judged_against_the_same_limit():
+    """A converging contact ladder (q = 64 + 0.2 h^2, limit 64 +- 0.25): the base (1.5 mm,
+    64.45) and a production model (63.2) get their errors against the same limit, the
+    production's signed (below the limit: negative)."""
+    from workbench.post.fidelity import limit_errors, relative_errors
+    from workbench.studies.kinds.fidelity.report_base import base_vs_limit, rows
+
+    lad = [_setting("contact-mesh-size", h, {"wedge": 64.0 + 0.2 * h**2}) for h in (3.0, 1.5, 1.0)]
+    ladders = {"contact-mesh-size": lad}
+    limits = ladder_limits(ladders)
+    ref = lad[-1]
+    comb = combined_limits(ref, ladders, limits)
+    base = lad[1]
+    base.role = "base"
+    prod = _setting("contact-mesh-size", 1.5, {"wedge": 63.2})
+    prod.role = "production"
+    for st in (base, prod):
+        st.errors, st.limit_errors = relative_errors(st, ref), limit_errors(st, comb)
+    summary = {
+        "limit": comb,
+        "knob_limits": {
+            k: {c: {q: e.as_dict() for q, e in qs.items()} for c, qs in lim.items()}
+            for k, lim in limits.items()
+        },
+    }
+    t = base_vs_limit(base, summary, ["wedge"], prod)["wedge"]["friction_energy_mj"]
+    assert t["asymptotic"] and t["limit"] == pytest.approx(64.0, rel=1e-9)
+    assert t["error_vs_limit_pct"] == pytest.approx(0.45 / 64.0 * 100, rel=1e-6)
+    p = t["production"]
+    assert p["value"] == 63.2
+    assert p["signed_error_pct"] == pytest.approx(-0.8 / 64.0 * 100, rel=1e-6)
+    assert p["error_vs_limit_pct"] == pytest.approx(0.8 / 64.0 * 100, rel=1e-6)
+    assert p["vs_base_pct"] == pytest.approx((63.2 - 64.45) / 64.45 * 100, rel=1e-9)
+    assert t["uncertainty_pct"] == pytest.approx(0.25 / 64.0 * 100, rel=1e-6)
+    # without a production model the row has no production entry; the CSV a row more with it
+    assert "production" not in base_vs_limit(base, summary, ["wedge"])["wedge"]["peak_amplitude_mm"]
+    with_p = rows(base_vs_limit(base, summary, ["wedge"], prod))
+    without = rows(base_vs_limit(base, summary, ["wedge"]))
+    assert len(with_p) == len(without) + 3
+    assert [r["error vs limit %"] for r in with_p if "production" in r["limit of"]][2] == (
+        pytest.approx(-1.25, rel=1e-6)
+    )

@@ -135,6 +135,8 @@ class _Computer:
             for knob in KNOBS:  # a knob that does not reach this damper: its base level
                 if not knob_applies(knob, d):
                     sd[knob] = self.base_values[knob]
+            if st.role == "production":  # the production job's own model
+                sd["geometry"] = self.spec.fidelity.production_geometry
             out.append(make_case(d, p, f, sd, st.label))
         return out
 
@@ -308,6 +310,12 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     combined = combined_limits(ref, ladders, limits)
     for st in settings:
         st.limit_errors = limit_errors(st, combined)
+    production = None
+    if spec.fidelity.production_geometry:  # the production job's model, at the base setting
+        production = Setting("production", dict(settings[0].values), "production")
+        comp.run([production], f"{spec.name}: production model")
+        production.errors = relative_errors(production, ref)
+        production.limit_errors = limit_errors(production, combined)
     pick = None
     combos: list[dict[str, Any]] = []
     if spec.fidelity.tolerance is not None:
@@ -352,6 +360,7 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
         "limit": combined,
         "base": {k: level_label(k, v) for k, v in settings[0].values.items()},
         "reference": {k: level_label(k, v) for k, v in ref.values.items()},
+        "production_geometry": str(spec.fidelity.production_geometry or ""),
         "n_settings": len(settings),
         "n_computed": comp.n_computed,
         "n_reused": comp.n_reused,
@@ -365,7 +374,7 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     }
     t_post = time.perf_counter()
     write_fidelity_outputs(
-        spec, out, settings, ladders, ref, front, summary, comp.names, t_post - t_start
+        spec, out, settings, ladders, ref, front, summary, comp.names, t_post - t_start, production
     )
     timings["post and report"] = time.perf_counter() - t_post
     timings["total"] = time.perf_counter() - t_start
@@ -514,12 +523,22 @@ def write_fidelity_outputs(
     summary: dict[str, Any],
     conditions: list[str],
     wall_s: float = 0.0,
+    production: Setting | None = None,
 ) -> None:
     """Tables (CSV, JSON), charts, manifest.json and report.html."""
     from .report import fidelity_outputs
 
     head, timings, sections = fidelity_outputs(
-        out, settings, ladders, ref, front, summary, conditions, spec.fidelity.tolerance, wall_s
+        out,
+        settings,
+        ladders,
+        ref,
+        front,
+        summary,
+        conditions,
+        spec.fidelity.tolerance,
+        wall_s,
+        production,
     )
     write_manifest_and_report(out, spec, "fidelity study,", head, timings, sections)
 

@@ -329,10 +329,13 @@ def plot_base_vs_limit(
     is). ``base``: ``time_s`` and per quantity a list of ``(case, error %,
     uncertainty %)`` for the trusted cases, and ``untrusted[quantity]``: the
     cases with no trusted limit, named on the panel instead of a number.
+    Optional ``production`` (per quantity, as the base's lists) and
+    ``production_time_s``: the production job's own model, drawn hollow.
     """
     plt = pyplot()
     qs = ["peak_amplitude_mm", "peak_frequency_hz", "friction_energy_mj"]
     units = {"peak_amplitude_mm": "mm", "peak_frequency_hz": "Hz", "friction_energy_mj": "mJ"}
+    prod = base.get("production") or {}
     fig, axes = plt.subplots(1, 3, figsize=(FIGSIZE[0] * 1.9, FIGSIZE[1] * 1.15))
     groups = list(dict.fromkeys(p["group"] for p in points))
     extra = iter(_EXTRA_COLORS)
@@ -362,7 +365,9 @@ def plot_base_vs_limit(
         n = len(base[q])
         # the lowest error drawn: a band reaching zero (uncertainty >= error) ends a third
         # of it lower, with an arrow down (a log axis has no zero)
-        ys = [_floor(p.get(q))[0] for p in points] + [max(e, ERR_FLOOR) for _, e, _ in base[q]]
+        ys = [_floor(p.get(q))[0] for p in points] + [
+            max(e, ERR_FLOOR) for _, e, _ in base[q] + prod.get(q, [])
+        ]
         ys = [y for y in ys if y is not None]
         bottom = min(ys) / 3.0 if ys else ERR_FLOOR
         for i, (case, e, u) in enumerate(base[q]):
@@ -387,6 +392,25 @@ def plot_base_vs_limit(
             if to_zero:
                 ax.plot([x], [bottom], marker="v", ms=5, color=col, zorder=4)
             handles.setdefault(f"base: {case}", h)
+            drawn = True
+        for i, (case, e, u) in enumerate(prod.get(q, [])):
+            x = base["production_time_s"] * 1.07 ** (i - (len(prod[q]) - 1) / 2)
+            y = max(e, ERR_FLOOR)
+            u = u or 0.0
+            h = ax.errorbar(
+                [x],
+                [y],
+                yerr=[[min(u, y - bottom)], [u]],
+                marker=styles[case][1],
+                ms=8,
+                color=colors[_force_of(case)],
+                mfc="white",
+                mec=colors[_force_of(case)],
+                capsize=3,
+                ls="none",
+                zorder=4,
+            )
+            handles.setdefault("production model (hollow), per case", h)
             drawn = True
         if drawn:
             _log_axes(ax)

@@ -53,6 +53,15 @@ class FidelityOptions:
         "'wedge 0', 'cone 180'), every pair at every force (empty: every damper at every phase)",
         "fidelity",
     )
+    production_geometry: str | None = option(
+        "path",
+        None,
+        "fidelity: the geometry file of a production job whose model differs from the "
+        "study's (for instance point contacts against this study's contact pads): its "
+        "cases are solved at the base setting and judged against this study's limit",
+        "fidelity",
+        optional=True,
+    )
     levels_mesh_size: list[float] = option(
         "floats",
         [14.0, 11.0, 9.0, 7.0],

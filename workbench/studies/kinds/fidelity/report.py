@@ -58,6 +58,7 @@ def fidelity_outputs(
     conditions: list[str],
     tolerance: float | None,
     wall_s: float = 0.0,
+    production: Setting | None = None,
 ) -> tuple[list[str], dict[str, float], list[dict[str, Any]]]:
     """Write the tables (CSV, JSON) and charts; return the report's (head, timings, sections)."""
     from .figures import plot_knob, plot_pareto
@@ -164,7 +165,7 @@ def fidelity_outputs(
             }
         )
     sections.append(_limits_section(summary, tables))
-    sections.append(_base_section(out, settings, summary, conds))
+    sections.append(_base_section(out, settings, summary, conds, production))
     tol = tolerance
     picked = (summary.get("picked") or {}).get("picked")
     cand = [s for s in settings if s.role != "reference"]
@@ -289,14 +290,19 @@ def limit_rows(summary: dict[str, Any]) -> list[dict[str, Any]]:
 
 
 def _base_section(
-    out: Path, settings: list[Setting], summary: dict[str, Any], conds: list[str]
+    out: Path,
+    settings: list[Setting],
+    summary: dict[str, Any],
+    conds: list[str],
+    production: Setting | None = None,
 ) -> dict[str, Any]:
-    """The base setting against the limit: its chart, tables and section (report_base.py)."""
+    """The base setting (and the production model's, if any) against the limit: its chart,
+    tables and section (report_base.py)."""
     from .figures import plot_base_per_knob, plot_base_vs_limit
     from .report_base import base_section, base_vs_limit
 
     base = next(s for s in settings if s.role == "base")
-    table = base_vs_limit(base, summary, conds)
+    table = base_vs_limit(base, summary, conds, production)
     qs = [q for q, _, _ in QUANTITIES]
     trusted = {q: [c for c in conds if table[c][q]["asymptotic"]] for q in qs}
 
@@ -325,6 +331,14 @@ def _base_section(
             for c in trusted[q]
             if table[c][q]["error_vs_limit_pct"] is not None
         ]
+        if production is not None:
+            marks.setdefault("production", {})[q] = [
+                (c, table[c][q]["production"]["error_vs_limit_pct"], table[c][q]["uncertainty_pct"])
+                for c in trusted[q]
+                if table[c][q]["production"]["error_vs_limit_pct"] is not None
+            ]
+    if production is not None:
+        marks["production_time_s"] = production.time_s
     fig = plot_base_vs_limit(points, marks, out / "figures" / "fidelity_base_vs_limit.png")
     per_knob = plot_base_per_knob(table, out / "figures" / "fidelity_base_per_knob.png")
     return base_section(out, base, summary, conds, [fig, per_knob])

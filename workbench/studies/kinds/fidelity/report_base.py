@@ -38,14 +38,21 @@ def _pct(num: float | None, den: float | None) -> float | None:
 
 
 def base_vs_limit(
-    base: Setting, summary: dict[str, Any], conditions: list[str]
+    base: Setting,
+    summary: dict[str, Any],
+    conditions: list[str],
+    production: Setting | None = None,
 ) -> dict[str, dict[str, dict[str, Any]]]:
     """condition -> quantity -> the base's value, its errors and the limits (see module doc).
 
     Errors and uncertainties in percent of the limit; ``limit`` and
     ``uncertainty`` in the quantity's units. ``error_vs_limit_pct`` and
     ``uncertainty_pct`` are None where the limit is not trusted
-    (``asymptotic`` False, ``reason`` says why).
+    (``asymptotic`` False, ``reason`` says why). With ``production`` (the base
+    setting on the production job's own model, see the ``production-geometry``
+    option) each row also has ``production``: its value, its error against the
+    same limit (``error_vs_limit_pct``, and ``signed_error_pct``: above the limit
+    positive) and its difference from the base in percent of the base.
     """
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for cond in conditions:
@@ -83,7 +90,28 @@ def base_vs_limit(
                 "error_vs_reference_pct": base.errors.get(cond, {}).get(q),
                 "knobs": knobs,
             }
+            if production is not None:
+                out[cond][q]["production"] = _production_row(
+                    production, cond, q, v, lim.get("value") if trusted else None
+                )
     return out
+
+
+def _production_row(
+    production: Setting, cond: str, q: str, base: float | None, limit: float | None
+) -> dict[str, Any]:
+    """The production model's value at ``cond``, its error against ``limit`` (None: not
+    trusted) and its difference from the base setting on this study's model."""
+    p = setting_value(production, cond, q)
+    signed = None if p is None or limit is None else (p - limit) / abs(limit) * 100.0
+    return {
+        "value": p,
+        "error_vs_limit_pct": None if signed is None else abs(signed),
+        "signed_error_pct": signed,
+        "vs_base_pct": None
+        if p is None or base is None or base == 0
+        else (p - base) / abs(base) * 100.0,
+    }
 
 
 def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
@@ -106,6 +134,23 @@ def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
                     "why not asymptotic": d["reason"],
                 }
             )
+            pr = d.get("production")
+            if pr is not None:
+                out.append(
+                    {
+                        "condition": cond,
+                        "quantity": q,
+                        "limit of": "all knobs (production model)",
+                        "base": pr["value"],
+                        "limit": d["limit"],
+                        "uncertainty": d["uncertainty"],
+                        "error vs limit %": pr["signed_error_pct"],
+                        "uncertainty %": d["uncertainty_pct"],
+                        "asymptotic": d["asymptotic"],
+                        "error vs reference %": None,
+                        "why not asymptotic": d["reason"],
+                    }
+                )
             for knob, k in d["knobs"].items():
                 out.append(
                     {
@@ -161,6 +206,7 @@ def base_section(
             "study": summary["study"],
             "base": summary["base"],
             "reference": summary["reference"],
+            "production_geometry": summary.get("production_geometry", ""),
             "note": "errors and uncertainties in percent of the limit; limit and uncertainty "
             "in the quantity's unit; None where the limit is not trusted (asymptotic false)",
             "cases": table,
@@ -181,6 +227,27 @@ def base_section(
     for cond in conditions:
         for q, name, _ in QUANTITIES:
             text.append(f"{cond}, {name}: {_cell(table[cond][q])}.")
+    if summary.get("production_geometry"):
+        text.append(
+            "The production job's own model ("
+            + Path(summary["production_geometry"]).name
+            + ") at the base setting, against the same limit (signed: above the limit "
+            "positive; +- the limit's uncertainty):"
+        )
+        for cond in conditions:
+            for q, name, unit in QUANTITIES:
+                d = table[cond][q]
+                pr = d["production"]
+                if pr["value"] is None:
+                    cell = "no value (the solve failed or found no peak)"
+                elif pr["signed_error_pct"] is None:
+                    cell = f"{pr['value']:.4g} {unit}, no trusted limit"
+                else:
+                    cell = (
+                        f"{pr['value']:.4g} {unit}, {pr['signed_error_pct']:+.3g} % "
+                        f"+- {d['uncertainty_pct']:.2g} %"
+                    )
+                text.append(f"{cond}, {name}: {cell}.")
     sec: dict[str, Any] = {
         "id": "base-vs-limit",
         "title": "The base setting against the limit",
