@@ -42,22 +42,43 @@ def test_observed_order_non_uniform_ratios():
 
 
 def test_oscillating_data_are_flagged_and_not_extrapolated():
+    """Differences that change sign: no extrapolation. If they do not grow as the levels get
+    finer the limit is bounded by the spread (x 1.25) around the finest; if they grow,
+    nothing bounds it."""
     est = richardson([1.0, 2.0, 4.0, 8.0], [1.0, 1.02, 0.99, 1.05])
-    assert not est.asymptotic and est.method == "finest level"
-    assert est.value == 1.0 and est.uncertainty is None and "oscillating" in est.reason
+    assert not est.asymptotic and est.trusted and est.method == "bounded"
+    assert est.value == 1.0 and "oscillating" in est.reason
+    assert est.uncertainty == pytest.approx(1.25 * 0.03, rel=1e-12)
+    grow = richardson([1.0, 2.0, 4.0], [1.0, 0.96, 0.99])
+    assert not grow.trusted and grow.method == "finest level" and grow.uncertainty is None
+    assert "grow" in grow.reason
+
+
+def test_a_decaying_oscillation_lies_within_its_bound():
+    """q = 1 + 0.01 h (-1)^log2(h): the error halves and changes sign at every level; the
+    limit 1 lies inside the bound of every three consecutive levels."""
+    h = [2.0**k for k in range(6)]
+    q = [1.0 + 0.01 * x * (-1) ** k for k, x in enumerate(h)]
+    for i in range(4):
+        est = richardson(h[i : i + 3], q[i : i + 3])
+        assert est.method == "bounded" and est.trusted
+        assert abs(est.value - 1.0) <= est.uncertainty
+        assert est.uncertainty <= 1.25 * 0.06 * h[i] + 1e-15  # it shrinks with the levels
 
 
 def test_implausible_order_is_flagged():
     # differences 1e-3 then 1e-6 at ratio 2: p ~ 10, beyond 0.5..8
+    # bounded, not extrapolated: the limit within 1.25 times the levels' spread of the finest
     est = richardson([1.0, 2.0, 4.0], [1.0, 1.000001, 1.001001])
     assert not est.asymptotic and est.value == 1.0 and est.order > 8
-    assert "outside the plausible" in est.reason
+    assert "above the plausible" in est.reason and est.method == "bounded" and est.trusted
+    assert est.uncertainty == pytest.approx(1.25 * 0.001001, rel=1e-9)
     # a coarser difference smaller than the finer one: diverging, no power law
     est = richardson([1.0, 2.0, 4.0], [1.0, 1.001, 1.001001])
     assert not est.asymptotic and est.order is None and "no power law" in est.reason
     # nearly equal differences: p ~ 0.01, pre-asymptotic
     est = richardson([1.0, 2.0, 4.0], [1.0, 1.1, 1.2007])
-    assert not est.asymptotic and est.order < 0.5
+    assert not est.asymptotic and est.order < 0.5 and not est.trusted
 
 
 def test_round_off_and_too_few_levels():
@@ -173,9 +194,9 @@ def test_the_pick_judges_by_the_limit_only_where_it_is_trusted():
         errors={"c": {qa: 0.5, qb: 1.0, qc: 0.1}},
         limit_errors={"c": {qa: 2.0, qb: 9.0, qc: 0.2}},
     )
-    combined = {"c": {qa: {"asymptotic": True}, qb: {"asymptotic": False}, qc: {}}}
+    combined = {"c": {qa: {"trusted": True}, qb: {"trusted": False}, qc: {}}}
     assert pick_error(st, combined) == 2.0
     assert qa in pick_basis(combined) and qb not in pick_basis(combined)
-    none = {"c": {q: {"asymptotic": False} for q in (qa, qb, qc)}}
+    none = {"c": {q: {"trusted": False} for q in (qa, qb, qc)}}
     assert pick_error(st, none) == 1.0  # all against the reference
     assert pick_basis(none).startswith("errors against the reference")

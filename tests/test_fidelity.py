@@ -335,7 +335,10 @@ def test_tiny_errors_against_the_limit(tiny):
                 e = byq[q]
                 if e["asymptotic"]:  # an extrapolation: with its order and uncertainty
                     assert e["method"] == "richardson" and 0.5 <= e["order"] <= 8
-                    assert e["uncertainty"] >= 0 and e["reason"] == ""
+                    assert e["uncertainty"] >= 0 and e["reason"] == "" and e["trusted"]
+                elif e["trusted"]:  # bounded: the finest level +- the finest levels' spread
+                    assert e["method"] == "bounded" and e["value"] == e["finest"]
+                    assert e["uncertainty"] >= 0 and "bounded" in e["reason"]
                 else:  # no made-up number: the finest level, with the reason
                     assert e["method"] == "finest level" and e["value"] == e["finest"]
                     assert e["reason"]
@@ -344,8 +347,9 @@ def test_tiny_errors_against_the_limit(tiny):
         for q in qs:
             e = byq[q]
             flags = [s["knob_limits"][k][c][q]["asymptotic"] for k in s["knob_limits"]]
-            assert e["asymptotic"] == all(flags)
-            assert (e["uncertainty"] is None) == (not all(flags))
+            trusted = [s["knob_limits"][k][c][q]["trusted"] for k in s["knob_limits"]]
+            assert e["asymptotic"] == all(flags) and e["trusted"] == all(trusted)
+            assert (e["uncertainty"] is None) == (not all(trusted))
     ref = rows["reference"]
     for q in qs:  # the reference itself is measured against the limit
         assert ref[f"err_lim_{q}_pct"] is not None and ref[f"err_lim_{q}_pct"] >= 0

@@ -224,9 +224,9 @@ PADS = ROOT / "studies" / "fidelity_paper_rig_pads.toml"
 def test_the_pad_study_is_the_point_study_on_the_pad_rig_with_the_main_job_as_production(
     tmp_path,
 ):
-    """Same cases, base, knobs and levels as the point-contact study; its model is the pad
-    rig; the production model (the main job's rig file) is solved at the base setting: the
-    same solve, another model."""
+    """Same cases, base and knobs as the point-contact study, each ladder the point study's
+    levels and one finer; its model is the pad rig; the production model (the main job's
+    rig file) is solved at the base setting: the same solve, another model."""
     from workbench.studies.kinds.fidelity.compute import _Computer
     from workbench.studies.kinds.fidelity.ladders import plan_settings
 
@@ -236,9 +236,14 @@ def test_the_pad_study_is_the_point_study_on_the_pad_rig_with_the_main_job_as_pr
     assert Path(pads.fidelity.production_geometry).resolve() == Path(main.geometry).resolve()
     cp, cq = _Computer(point, tmp_path / "p", False), _Computer(pads, tmp_path / "q", False)
     assert cq.names == cp.names == CASES and cq.base_values == cp.base_values
-    sp_, _ = plan_settings(point, cp.dampers)
-    sq, _ = plan_settings(pads, cq.dampers)
-    assert [s.values for s in sq] == [s.values for s in sp_]
+    sp_, lp = plan_settings(point, cp.dampers)
+    sq, lq = plan_settings(pads, cq.dampers)
+    assert sq[0].values == sp_[0].values and set(lq) == set(lp)
+    for knob in lp:
+        finer = knob not in ("contact-mesh-size", "modes")  # one more level on the pad rig
+        n = len(lp[knob])
+        assert len(lq[knob]) == n + finer, knob
+        assert [s.values for s in lq[knob][:n]] == [s.values for s in lp[knob]], knob
     prod = Setting("production", dict(sq[0].values), "production")
     on_pads, on_main = cq.cases(sq[0]), cq.cases(prod)
     for a, b, c in zip(on_pads, on_main, cp.cases(sp_[0]), strict=True):

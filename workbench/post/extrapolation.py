@@ -30,6 +30,20 @@ value is the finest level's, ``method = "finest level"``) when
   ladder has converged, the finest value is the answer, and the
   uncertainty is the largest difference seen.
 
+Two of those cases still bound the limit (``method = "bounded"``, value
+the finest level's, ``trusted`` True though ``asymptotic`` is False):
+oscillating differences that do not grow (``|q2 - q1| <= |q3 - q2|``,
+finest first), and an observed order above the plausible range (the
+differences shrink faster than any power law would make them). The limit
+then lies within the finest three levels' spread, and the uncertainty is
+``SAFETY`` times that spread (the procedure for oscillatory convergence of
+Celik et al., "Procedure for estimation and reporting of uncertainty due
+to discretization in CFD applications", J. Fluids Eng. 2008, which takes
+half the spread; this takes 1.25 times the whole of it). Growing
+oscillations, no fitting power law and orders below the range stay
+untrusted: the ladder may be diverging or pre-asymptotic, and nothing
+bounds it.
+
 No library of this package is imported here (plain numpy).
 """
 
@@ -67,8 +81,13 @@ class LimitEstimate:
     finest: float | None
     n_levels: int
 
+    @property
+    def trusted(self) -> bool:
+        """Extrapolated (``asymptotic``) or bounded by the finest levels' spread."""
+        return self.asymptotic or self.method == "bounded"
+
     def as_dict(self) -> dict:
-        return asdict(self)
+        return dict(asdict(self), trusted=self.trusted)
 
     def error_pct(self, q: float | None) -> float | None:
         """|q - value| / |value| in percent (None: nothing to compare)."""
@@ -164,12 +183,27 @@ def richardson(
             f"converged to round-off: the finest levels agree within {rtol_converged:g} (relative)",
             unc=float(max(abs(e21), abs(e32))),
         )
+    spread = float(qq.max() - qq.min())
+
+    def bounded(reason: str, order: float | None = None) -> LimitEstimate:
+        why = f"{reason}; bounded by the finest three levels' spread (x {safety:g})"
+        return LimitEstimate(finest, safety * spread, order, False, "bounded", why, finest, 3)
+
     if e21 == 0 or e32 == 0 or np.sign(e21) != np.sign(e32):
-        return fallback("oscillating: the differences between the finest levels change sign")
+        why = "oscillating: the differences between the finest levels change sign"
+        if abs(e21) <= abs(e32):
+            return bounded(why)
+        return fallback(why + ", and grow as the levels get finer")
     p = observed_order(hh, qq)
     if p is None:
         return fallback("no power law fits the finest three levels")
-    if not p_range[0] <= p <= p_range[1]:
+    if p > p_range[1]:
+        return bounded(
+            f"observed order {p:.3g} above the plausible {p_range[1]:g}: the differences "
+            "shrink faster than a power law",
+            order=p,
+        )
+    if p < p_range[0]:
         return fallback(
             f"observed order {p:.3g} outside the plausible {p_range[0]:g}..{p_range[1]:g}: "
             "the levels are not in the asymptotic range",

@@ -259,8 +259,10 @@ def combined_limits(
     value plus, per knob, its extrapolated limit minus its finest level's
     value (both with the other knobs at the base). The uncertainty is the sum
     of the knobs' (conservative). ``asymptotic`` is True only if every knob's
-    is; a knob that falls back adds no correction and no known uncertainty,
-    so the uncertainty is then None. A knob whose finest level is not the
+    is; ``trusted`` if every knob's limit is extrapolated or bounded (a
+    bounded knob, ``bounded`` lists them, adds no correction but its bound to
+    the uncertainty); a knob that falls back untrusted adds no correction and
+    no known uncertainty, so the uncertainty is then None. A knob whose finest level is not the
     reference's value (the base is finer) cannot be used: flagged too. A knob
     that is no discretisation (the rigid or flexible damper: a modelling
     choice, no fineness) has no limit: the reference's choice stands and it
@@ -273,6 +275,8 @@ def combined_limits(
             v = setting_value(ref, cond, q)
             unc: float | None = 0.0
             asym, why = v is not None, [] if v is not None else ["no reference value"]
+            trusted = asym
+            bound: list[str] = []
             orders: dict[str, float | None] = {}
             for knob, lad in ladders.items():
                 if not is_ladder(knob, lad):
@@ -282,16 +286,19 @@ def combined_limits(
                     continue  # the knob does not reach this condition's model
                 orders[knob] = est.order if est is not None else None
                 if lad[-1].values[knob] != ref.values[knob]:
-                    asym, unc = False, None
+                    asym, trusted, unc = False, False, None
                     why.append(f"{knob}: the base is finer than its levels")
                     continue
                 if est is not None and est.finest != setting_value(lad[-1], cond, q):
                     est = None  # the finest level failed: its correction has no anchor
-                if est is None or not est.asymptotic:
-                    asym, unc = False, None
+                if est is None or not est.trusted:
+                    asym, trusted, unc = False, False, None
                     why.append(f"{knob}: {est.reason if est is not None else 'no value'}")
                     continue
-                if v is not None:
+                if not est.asymptotic:  # bounded: no correction, its bound widens the band
+                    asym = False
+                    bound.append(knob)
+                elif v is not None:
                     v += est.value - est.finest
                 if unc is not None:
                     unc += est.uncertainty
@@ -299,6 +306,8 @@ def combined_limits(
                 "value": v,
                 "uncertainty": unc,
                 "asymptotic": asym,
+                "trusted": trusted,
+                "bounded": bound,
                 "orders": orders,
                 "reason": "; ".join(why),
             }
@@ -318,14 +327,14 @@ def limit_errors(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) ->
 
 def pick_error(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) -> float | None:
     """The worst error (percent) the tolerance pick judges ``st`` by: against the
-    all-knob limit where that limit is trusted (``asymptotic``), against the reference
+    all-knob limit where that limit is trusted (``trusted``), against the reference
     elsewhere (the limit of that condition and quantity is not known). None if any error
     is missing."""
     errs: dict[str, dict[str, float | None]] = {}
     for cond in st.results:
         errs[cond] = {}
         for q, _, _ in QUANTITIES:
-            trusted = combined.get(cond, {}).get(q, {}).get("asymptotic")
+            trusted = combined.get(cond, {}).get(q, {}).get("trusted")
             src = (st.limit_errors if trusted else st.errors).get(cond, {})
             if q in src or cond not in (st.limit_errors if trusted else st.errors):
                 errs[cond][q] = src.get(q)
@@ -335,7 +344,7 @@ def pick_error(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) -> f
 def pick_basis(combined: dict[str, dict[str, dict[str, Any]]]) -> str:
     """In words, what :func:`pick_error` measures against."""
     trusted = sorted({f"{q} at {c}" for c, qs in combined.items() for q, e in qs.items()
-                      if e.get("asymptotic")})  # fmt: skip
+                      if e.get("trusted")})  # fmt: skip
     if not trusted:
         return "errors against the reference (no extrapolated limit is trusted)"
     listed = ", ".join(trusted)

@@ -515,7 +515,7 @@ def plot_base_per_knob(table: dict[str, dict[str, dict[str, Any]]], path: str | 
     from matplotlib.lines import Line2D
 
     handles.append(Line2D([], [], ls="none", marker="x", color="0.6"))
-    labels.append("not asymptotic: no limit, no error")
+    labels.append("not trusted: no limit, no error")
     fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
     fig.suptitle(
         "the base against each knob's own Richardson limit (the other knobs at the base), "

@@ -266,6 +266,7 @@ def limit_rows(summary: dict[str, Any]) -> list[dict[str, Any]]:
                         "uncertainty": e["uncertainty"],
                         "observed order": e["order"],
                         "asymptotic": e["asymptotic"],
+                        "trusted": e["trusted"],
                         "method": e["method"],
                         "why not asymptotic": e["reason"],
                     }
@@ -282,6 +283,7 @@ def limit_rows(summary: dict[str, Any]) -> list[dict[str, Any]]:
                     "uncertainty": e["uncertainty"],
                     "observed order": None,
                     "asymptotic": e["asymptotic"],
+                    "trusted": e["trusted"],
                     "method": "sum of the knobs' corrections",
                     "why not asymptotic": e["reason"],
                 }
@@ -304,7 +306,7 @@ def _base_section(
     base = next(s for s in settings if s.role == "base")
     table = base_vs_limit(base, summary, conds, production)
     qs = [q for q, _, _ in QUANTITIES]
-    trusted = {q: [c for c in conds if table[c][q]["asymptotic"]] for q in qs}
+    trusted = {q: [c for c in conds if table[c][q]["trusted"]] for q in qs}
 
     def worst_trusted(st: Setting, q: str) -> float | None:
         es = [st.limit_errors.get(c, {}).get(q) for c in trusted[q]]
@@ -357,7 +359,7 @@ def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
             for k, lim in summary["knob_limits"].items()
             for qs in lim.values()
             for e in qs.values()
-            if not e["asymptotic"] and k not in choices and e["reason"] != NOT_APPLICABLE
+            if not e["trusted"] and k not in choices and e["reason"] != NOT_APPLICABLE
         }
     )
     text = [
@@ -368,14 +370,17 @@ def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
         "index). The limit of every knob at once is the reference plus each knob's "
         "correction q0 - q_finest (the knobs' errors assumed to add), its uncertainty the "
         "sum of theirs. The 'vs limit' columns of the tables measure every setting, the "
-        "reference included, against it. Where a knob's finest levels are not asymptotic "
-        "(differences changing sign, p outside 0.5..8, fewer than three levels, differences "
-        "at round-off) nothing is extrapolated: that knob contributes no correction, the "
-        "flag 'asymptotic' is false and no uncertainty is given, so the error is then "
-        "against the finest level, as before. The tolerance pick uses the errors against "
-        "the limit where it is trusted and against the reference elsewhere (its reason "
-        "says which).",
-        "Knobs not asymptotic for some condition or quantity: "
+        "reference included, against it. Where a knob's finest levels oscillate without "
+        "growing, or converge faster than p = 8, nothing is extrapolated but the limit is "
+        "bounded: the finest level, +- 1.25 times the finest three levels' spread (method "
+        "'bounded'; such a knob adds that bound to the uncertainty and no correction). "
+        "Where they grow, fit no power law, give p below 0.5, have fewer than three levels "
+        "or differ at round-off, nothing is extrapolated or bounded: that knob contributes "
+        "no correction, the flag 'trusted' is false and no uncertainty is given, so the "
+        "error is then against the finest level, as before. The tolerance pick uses the "
+        "errors against the limit where it is trusted and against the reference elsewhere "
+        "(its reason says which).",
+        "Knobs neither extrapolated nor bounded for some condition or quantity: "
         + (", ".join(flagged) if flagged else "none")
         + "."
         + (
@@ -394,7 +399,7 @@ def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:
             {
                 "path": "tables/fidelity_limits.csv",
                 "caption": "limit estimates: per knob and all knobs, with order, "
-                "uncertainty (quantity units) and the asymptotic flag",
+                "uncertainty (quantity units), the asymptotic and trusted flags",
             }
         ],
     }
@@ -405,13 +410,13 @@ def _reference_vs_limit(row: dict[str, Any], limit: dict[str, Any]) -> str:
     parts = []
     for q, name, _ in QUANTITIES:
         e, u = row.get(f"err_lim_{q}_pct"), limit_uncertainty_pct(limit, q)
-        flag = all(c.get(q, {}).get("asymptotic") for c in limit.values())
+        flag = all(c.get(q, {}).get("trusted") for c in limit.values())
         if e is None:
             parts.append(f"{name} n/a")
         elif flag and u is not None:
             parts.append(f"{name} {e:.3g} % (+- {u:.2g} %)")
         else:
-            parts.append(f"{name} {e:.3g} % (not asymptotic: against the finest levels)")
+            parts.append(f"{name} {e:.3g} % (not trusted: against the finest levels)")
     return "reference vs the extrapolated limit (worst condition): " + "; ".join(parts)
 
 

@@ -6,11 +6,11 @@ from the converged model?". Per condition and quantity this module gives
 
 * the error of the base against the limit of every knob at once
   (``workbench.post.fidelity.combined_limits``), with the limit's
-  uncertainty, ONLY where that limit is trusted (``asymptotic``); elsewhere
+  uncertainty, ONLY where that limit is trusted (``trusted``); elsewhere
   no number, the reason instead;
 * per knob, the base's error against that knob's own Richardson limit (the
   other knobs at the base, so the base is a level of that ladder), again
-  only where the knob's finest levels are asymptotic;
+  only where the knob's finest levels extrapolate or bound it;
 * the base's error against the reference (every knob at its finest level),
   which is no limit but a measured difference.
 
@@ -48,7 +48,8 @@ def base_vs_limit(
     Errors and uncertainties in percent of the limit; ``limit`` and
     ``uncertainty`` in the quantity's units. ``error_vs_limit_pct`` and
     ``uncertainty_pct`` are None where the limit is not trusted
-    (``asymptotic`` False, ``reason`` says why). With ``production`` (the base
+    (``trusted`` False, ``reason`` says why; ``asymptotic``: every knob
+    extrapolated, none only bounded). With ``production`` (the base
     setting on the production job's own model, see the ``production-geometry``
     option) each row also has ``production``: its value, its error against the
     same limit (``error_vs_limit_pct``, and ``signed_error_pct``: above the limit
@@ -60,18 +61,20 @@ def base_vs_limit(
         for q, _, unit in QUANTITIES:
             v = setting_value(base, cond, q)
             lim = summary["limit"].get(cond, {}).get(q, {})
-            trusted = bool(lim.get("asymptotic")) and v is not None
+            trusted = bool(lim.get("trusted")) and v is not None
             knobs: dict[str, Any] = {}
             for knob, by_cond in summary["knob_limits"].items():
                 e = by_cond.get(cond, {}).get(q)
                 if e is None or e["reason"] == NOT_APPLICABLE or e["method"] == "not applicable":
                     continue
-                ok = bool(e["asymptotic"]) and v is not None and e["value"] is not None
+                ok = bool(e["trusted"]) and v is not None and e["value"] is not None
                 knobs[knob] = {
                     "limit": e["value"] if ok else None,
                     "uncertainty": e["uncertainty"] if ok else None,
                     "order": e["order"],
                     "asymptotic": bool(e["asymptotic"]),
+                    "trusted": bool(e["trusted"]),
+                    "method": e["method"],
                     "error_vs_limit_pct": _pct(v - e["value"], e["value"]) if ok else None,
                     "uncertainty_pct": _pct(e["uncertainty"], e["value"]) if ok else None,
                     "reason": e["reason"],
@@ -81,7 +84,9 @@ def base_vs_limit(
                 "base": v,
                 "limit": lim.get("value") if trusted else None,
                 "uncertainty": lim.get("uncertainty") if trusted else None,
-                "asymptotic": trusted,
+                "asymptotic": trusted and bool(lim.get("asymptotic")),
+                "trusted": trusted,
+                "bounded": list(lim.get("bounded", [])) if trusted else [],
                 "error_vs_limit_pct": base.limit_errors.get(cond, {}).get(q) if trusted else None,
                 "uncertainty_pct": _pct(lim.get("uncertainty"), lim.get("value"))
                 if trusted
@@ -129,9 +134,10 @@ def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
                     "uncertainty": d["uncertainty"],
                     "error vs limit %": d["error_vs_limit_pct"],
                     "uncertainty %": d["uncertainty_pct"],
-                    "asymptotic": d["asymptotic"],
+                    "trusted": d["trusted"],
+                    "bounded by": ", ".join(d["bounded"]),
                     "error vs reference %": d["error_vs_reference_pct"],
-                    "why not asymptotic": d["reason"],
+                    "why not trusted": d["reason"],
                 }
             )
             pr = d.get("production")
@@ -146,9 +152,10 @@ def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
                         "uncertainty": d["uncertainty"],
                         "error vs limit %": pr["signed_error_pct"],
                         "uncertainty %": d["uncertainty_pct"],
-                        "asymptotic": d["asymptotic"],
+                        "trusted": d["trusted"],
+                        "bounded by": ", ".join(d["bounded"]),
                         "error vs reference %": None,
-                        "why not asymptotic": d["reason"],
+                        "why not trusted": d["reason"],
                     }
                 )
             for knob, k in d["knobs"].items():
@@ -162,9 +169,10 @@ def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
                         "uncertainty": k["uncertainty"],
                         "error vs limit %": k["error_vs_limit_pct"],
                         "uncertainty %": k["uncertainty_pct"],
-                        "asymptotic": k["asymptotic"],
+                        "trusted": k["trusted"],
+                        "bounded by": knob if k["method"] == "bounded" else "",
                         "error vs reference %": None,
-                        "why not asymptotic": k["reason"],
+                        "why not trusted": k["reason"],
                     }
                 )
     return out
@@ -181,9 +189,12 @@ def _cell(d: dict[str, Any]) -> str:
         head = _pm(e, d["uncertainty_pct"])
     else:
         bad = [k for k, v in d["knobs"].items() if v["error_vs_limit_pct"] is None]
-        head = "no trusted limit" + (f" ({', '.join(bad)} not asymptotic)" if bad else "")
+        head = "no trusted limit" + (f" ({', '.join(bad)} not trusted)" if bad else "")
+    if e is not None and d["bounded"]:
+        head += f" (bounded, not extrapolated: {', '.join(d['bounded'])})"
     per = [
         f"{k} {_pm(v['error_vs_limit_pct'], v['uncertainty_pct'])}"
+        + (" (bound)" if v["method"] == "bounded" else "")
         for k, v in d["knobs"].items()
         if v["error_vs_limit_pct"] is not None
     ]
@@ -208,7 +219,10 @@ def base_section(
             "reference": summary["reference"],
             "production_geometry": summary.get("production_geometry", ""),
             "note": "errors and uncertainties in percent of the limit; limit and uncertainty "
-            "in the quantity's unit; None where the limit is not trusted (asymptotic false)",
+            "in the quantity's unit; None where the limit is not trusted (trusted false); "
+            "asymptotic: every knob extrapolated; bounded: the knobs whose limit is only "
+            "bounded by their finest levels' spread (no correction, their bound in the "
+            "uncertainty)",
             "cases": table,
         },
     )
@@ -218,8 +232,10 @@ def base_section(
         + ", ".join(str(v) for v in summary["base"].values())
         + ") against the extrapolated limit of every knob at once, per case: error in "
         "percent of the limit, +- the limit's uncertainty. 'no trusted limit': some knob's "
-        "finest levels are not asymptotic for that case and quantity (the table says which "
-        "and why), so no error against a limit is given. The table also gives, per knob, "
+        "finest levels neither extrapolate nor bound a limit for that case and quantity (the "
+        "table says which and why), so no error against a limit is given; 'bounded': a "
+        "knob's finest levels oscillate or converge faster than a power law, so its limit "
+        "is bounded by their spread instead of extrapolated. The table also gives, per knob, "
         "the base's error against that knob's own limit (the other knobs at the base), and "
         "the base's error against the reference (every knob at its finest level: a measured "
         "difference, not a limit).",
@@ -265,7 +281,7 @@ def base_section(
         "every setting's error against the extrapolated limit of every knob vs its compute "
         "time; the base per case with the limit's uncertainty",
         "the base's error against each knob's own limit per case, with that limit's "
-        "uncertainty (crosses: not asymptotic, no error)",
+        "uncertainty (crosses: not trusted, no error)",
     ]
     for fig, cap in zip(figures, captions, strict=False):
         sec["figures"].append({"path": str(fig.relative_to(out)), "caption": cap})
