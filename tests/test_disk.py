@@ -158,7 +158,6 @@ def test_craig_bampton_per_nodal_diameter_converges_from_above(clamped):
             "disk.n_blades",
         ),  # the damper, low in the groove, would touch the radial blade leaning in
         (36, {"rig": {"platform": {"overhang_mm": 36.0}}}, "rig.platform.overhang_mm"),
-        (12, {"rig": {"mesh": {"pad_mm": 2.0}}}, "rig.mesh.pad_mm"),  # pads: rig only
     ],
 )
 def test_bad_disk_input_names_the_parameter(n, over, param):
@@ -290,3 +289,36 @@ def test_reduced_sector_with_stuck_damper_matches_the_cyclic_modes(clamped):
         f = f[0::2] if k == 1 else f[:3]
         rel = (f - exact) / exact
         assert rel.min() > -1e-9 and rel.max() < 3e-4, (k, rel)
+
+
+def test_pads_on_the_disk_stiffen_every_nodal_diameter_and_keep_the_full_disk_check(tmp_path):
+    """Contact pads (12 mm on this coarse mesh, so that each pad holds nodes) tie nodes of the
+    sector and of the damper: a positive semidefinite penalty local to one sector, so every
+    cyclic frequency rises (or stays) and the disk assembled from rotated sector copies has
+    the same spectrum as the cyclic sector (the check without pads, above)."""
+    from workbench.fe.cyclic import assemble_sector, eigen, nd_modes, to_hz
+    from workbench.fe.cyclic_full import full_disk_matrices, match_spectra
+    from workbench.geometry.disk_build import build_disk_sector
+
+    over = {"rig": dict(COARSE["rig"], mesh=dict(COARSE["rig"]["mesh"], pad_mm=12.0))}
+    over["cylinder"] = COARSE["cylinder"]
+    rec = build_disk_sector("cylinder", tmp_path, geometry_file=PAPER, n_blades=6, overrides=over)
+    bare = build_disk_sector(
+        "cylinder", tmp_path / "bare", geometry_file=PAPER, n_blades=6, overrides=COARSE
+    )
+    cs, cs0 = assemble_sector(rec, _contact()), assemble_sector(bare, _contact())
+    assert cs.K.shape == cs0.K.shape and np.array_equal(cs.coords, cs0.coords)
+    dK = (cs.K - cs0.K).tocsr()
+    tied = np.unique(dK.nonzero()[0] // 3)
+    assert {0, 1} <= set(cs.body[tied].tolist())  # pads on the sector and on the damper
+    dofs = (3 * tied[:, None] + np.arange(3)[None, :]).ravel()
+    w = np.linalg.eigvalsh(dK[dofs][:, dofs].toarray())
+    assert w.min() > -1e-9 * w.max()  # positive semidefinite
+    for k in cs.nodal_diameters():
+        f, f0 = to_hz(nd_modes(cs, k, 3)[0]), to_hz(nd_modes(cs0, k, 3)[0])
+        assert np.all(f >= f0 * (1 - 1e-9)) and np.any(f > f0 * (1 + 1e-6)), k
+    nd = {k: nd_modes(cs, k, 3)[0] for k in cs.nodal_diameters()}
+    K, M, _ = full_disk_matrices(cs)
+    lam, _ = eigen(K, M, 14)
+    r = match_spectra(to_hz(lam), nd, 6)
+    assert r["n_compared"] >= 12 and r["worst_rel"] < 1e-8, r

@@ -158,6 +158,17 @@ def assemble_sector(rec, contact_params=None, *, with_damper: bool = True) -> Cy
     fixed = np.asarray(sec.clamped_blocks, dtype=np.int64)
     n_s = xs.shape[0]
     side = np.asarray(rec.contact.side)
+    one = np.flatnonzero(side == 1)
+    pad = pad_width_m(rec)
+    if pad > 0:  # the platform's pads, side-1 pairs' frames turned into this sector
+        from .pads import pad_penalty, penalty_alpha
+
+        frames = np.array(rec.contact.frames, dtype=float)
+        frames[one] = frames[one] @ R
+        c, alpha_pad = rec.contact, penalty_alpha(Ks.diagonal())
+        Ks = Ks + pad_penalty(
+            xs, platform, rec.image_points, frames, c.weight, c.kind, pad, alpha_pad
+        )
     if not with_damper:
         return CyclicSector(
             n_blades=rec.n_blades,
@@ -174,7 +185,6 @@ def assemble_sector(rec, contact_params=None, *, with_damper: bool = True) -> Cy
         )
     Kd, Md, xd, dnode = damper_matrices(rec)
     n_d = xd.shape[0]
-    one = np.flatnonzero(side == 1)
     n_img = len(one)
     n = n_s + n_d + n_img
     # pair i: damper node n_s + dnode[i]; platform node platform[i] (side 0) or an image node
@@ -227,7 +237,21 @@ def damper_matrices(rec) -> tuple[sp.csr_matrix, sp.csr_matrix, np.ndarray, np.n
     xd = dam.V.tabulate_dof_coordinates()
     tol = MATCH_REL_TOL * float(np.ptp(xd, axis=0).max())
     dnode = _match(rec.contact.points, xd, tol, "damper contact nodes")
-    return _petsc_to_scipy(dam.K), _petsc_to_scipy(dam.M), xd, dnode
+    Kd = _petsc_to_scipy(dam.K)
+    pad = pad_width_m(rec)
+    if pad > 0:  # the damper's pads (the pairs' frames are the disk frame's, as its nodes)
+        from .pads import pad_penalty, penalty_alpha
+
+        c = rec.contact
+        Kd = Kd + pad_penalty(
+            xd, dnode, c.points, c.frames, c.weight, c.kind, pad, penalty_alpha(Kd.diagonal())
+        )
+    return Kd.tocsr(), _petsc_to_scipy(dam.M), xd, dnode
+
+
+def pad_width_m(rec) -> float:
+    """The contact pads' width of a DiskSector, m (``[rig.mesh] pad_mm``; 0: no pads)."""
+    return float(rec.params.get("rig", {}).get("mesh", {}).get("pad_mm", 0.0)) * 1e-3
 
 
 def _drop_dirichlet(A: sp.csr_matrix, fixed_nodes: np.ndarray) -> sp.csr_matrix:

@@ -108,6 +108,51 @@ def rigid_penalty(r: np.ndarray) -> np.ndarray:
     return np.eye(3 * k) - Q @ Q.T
 
 
+def penalty_alpha(diagonal: np.ndarray) -> float:
+    """The tie's stiffness: ``ALPHA`` times the median of the body's positive diagonal
+    stiffness entries (clamped rows, set to 1, left out)."""
+    pos = diagonal[diagonal > 1.0]
+    return ALPHA * (float(np.median(pos)) if len(pos) else 1.0)
+
+
+def pad_penalty(
+    coords: np.ndarray,
+    centers: np.ndarray,
+    points: np.ndarray,
+    frames: np.ndarray,
+    weight: np.ndarray,
+    kind: str,
+    width: float,
+    alpha: float,
+):
+    """The pads' penalty on a body held by one process, a scipy CSR (3n, 3n) matrix.
+
+    ``coords`` (n, 3) the body's nodes (node-major DOFs ``3 node + c``); pair i ties node
+    ``centers[i]`` (its contact node, at ``points[i]``) and the nodes of its pad
+    (:func:`pad_members`) into one rigid body with ``alpha`` :func:`rigid_penalty`. The
+    distributed form for a dolfinx body is :func:`tie_pads`; the cyclic sector's bodies
+    (assembled on one process) use this.
+    """
+    import scipy.sparse as sp
+
+    members = pad_members(coords, points, frames, weight, kind, width)
+    rows, cols, vals = [], [], []
+    for c, mem in zip(np.asarray(centers, dtype=np.int64), members, strict=True):
+        g = np.concatenate([[c], mem[mem != c]])
+        if len(g) < 2:
+            continue
+        d = (3 * g[:, None] + np.arange(3)[None, :]).ravel()
+        rows.append(np.repeat(d, len(d)))
+        cols.append(np.tile(d, len(d)))
+        vals.append((alpha * rigid_penalty(coords[g] - coords[c])).ravel())
+    n = 3 * len(coords)
+    if not rows:
+        return sp.csr_matrix((n, n))
+    return sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
+    )
+
+
 def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
     """Make each contact point's pad rigid in ``body.K`` (PETSc, assembled again).
 
@@ -131,10 +176,7 @@ def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
     offset = body.V.dofmap.index_map.local_range[0]
     mine = [(offset + mem, coords[mem]) for mem in members]
     every = comm.allgather(mine)
-    diag = K.getDiagonal().getArray()
-    pos = diag[diag > 1.0]
-    med = float(np.median(pos)) if len(pos) else 1.0
-    alpha = ALPHA * max(comm.allgather(med))
+    alpha = max(comm.allgather(penalty_alpha(K.getDiagonal().getArray())))
     centers = nodes.global_dofs[:m] // 3
     lo, hi = K.getOwnershipRange()
     blocks: list[tuple[np.ndarray, np.ndarray]] = []  # (global dofs, dense block)
@@ -179,4 +221,12 @@ def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
     return {"pad_nodes": n_tied, "pad_alpha": alpha, "pad_nodes_per_pair": n_tied / max(m, 1)}
 
 
-__all__ = ["ALPHA", "FILL", "pad_members", "rigid_penalty", "tie_pads"]
+__all__ = [
+    "ALPHA",
+    "FILL",
+    "pad_members",
+    "pad_penalty",
+    "penalty_alpha",
+    "rigid_penalty",
+    "tie_pads",
+]

@@ -242,11 +242,6 @@ def smallest_n(lay: Layout) -> int:
 def make_disk_layout(gp: GeometryParams, disk: DiskParams) -> DiskLayout:
     """Seat the damper in the rig's groove and lay the sector out; InputError if it does not fit."""
     n = check_int("disk.n_blades", disk.n_blades, 2, MAX_BLADES)
-    if gp.rig.mesh.pad_mm > 0:
-        raise InputError(
-            "rig.mesh.pad_mm", gp.rig.mesh.pad_mm,
-            "0 on a bladed disk (contact pads are tied on the two-blade rig only)",
-        )  # fmt: skip
     lay = make_layout(gp)  # the rig section's and the damper's own checks
     bad = _problem(lay, n)
     if bad is not None:
