@@ -141,7 +141,13 @@ def _fake_setting(values: dict, q: float):
     from workbench.post.fidelity import QUANTITIES
 
     summ = {name: q for name, _, _ in QUANTITIES}
-    return NS(values=values, results={"c": NS(branch=NS(failed=False), summary=lambda: summ)})
+    res = NS(
+        branch=NS(failed=False),
+        summary=lambda: summ,
+        refined_peak=lambda: summ,
+        peak_resolution=lambda: {},
+    )
+    return NS(values=values, results={"c": res})
 
 
 def test_levels_of_one_fineness_are_one_step_of_the_ladder():
@@ -200,3 +206,50 @@ def test_the_pick_judges_by_the_limit_only_where_it_is_trusted():
     none = {"c": {q: {"trusted": False} for q in (qa, qb, qc)}}
     assert pick_error(st, none) == 1.0  # all against the reference
     assert pick_basis(none).startswith("errors against the reference")
+
+
+def test_differences_within_the_resolution_are_bounded_by_it():
+    """Three levels that differ by less than the quantity's resolution (a peak picked among
+    points 0.5 Hz apart is known to 0.25 Hz): no power law is sought, whatever the signs;
+    the limit is the finest level +- 1.25 x the resolution. Differences above it are
+    judged as before."""
+    q = [383.3, 383.1, 383.2]  # growing oscillation: untrusted without a resolution
+    assert not richardson([1.0, 2.0, 4.0], q).trusted
+    est = richardson([1.0, 2.0, 4.0], q, noise=0.25)
+    assert est.trusted and est.method == "bounded" and est.value == 383.3
+    assert est.uncertainty == pytest.approx(1.25 * 0.25, rel=1e-12)
+    assert "resolution" in est.reason
+    big = richardson([1.0, 2.0, 4.0], [383.3, 381.8, 382.8], noise=0.25)  # growing
+    assert not big.trusted
+
+
+def test_peak_resolution_of_a_sampled_parabola():
+    """Points every 1 Hz on a = 1 - (f - 400.3)^2 / 100: the highest point is 400 Hz; the
+    vertex lies 0.3 Hz and 0.0009 above it, within the resolution (0.5 Hz, 0.0025), and the
+    refined peak finds it."""
+    from types import SimpleNamespace as NS
+
+    from workbench.post.results import CaseResult
+
+    f = np.arange(390.0, 411.0)
+    a = 1.0 - (f - 400.3) ** 2 / 100.0
+    fake = NS(
+        peak_index=10,
+        branch=NS(n_points=len(f)),
+        freq_hz=f,
+        amp_mm=a,
+        energy_mj=np.column_stack([2.0 * a, a]),
+    )
+    fake.summary = lambda: {"peak_frequency_hz": 400.0, "peak_amplitude_mm": a[10],
+                            "friction_energy_mj": 3 * a[10]}  # fmt: skip
+    fake.peak_resolution = lambda: CaseResult.peak_resolution(fake)
+    top = CaseResult.refined_peak(fake)  # the parabola's vertex, from the three top points
+    assert top["peak_frequency_hz"] == pytest.approx(400.3, abs=2e-3)
+    assert top["peak_amplitude_mm"] == pytest.approx(1.0, abs=1e-6)
+    assert top["friction_energy_mj"] == pytest.approx(3.0, abs=3e-6)
+    r = CaseResult.peak_resolution(fake)
+    assert r["peak_frequency_hz"] == 0.5
+    assert r["peak_amplitude_mm"] == pytest.approx(2.0 / 100.0 / 8.0, rel=1e-9)
+    assert 0.3 <= r["peak_frequency_hz"] and 0.0009 <= r["peak_amplitude_mm"]
+    # energy: half its largest change to a neighbour (3 a here)
+    assert r["friction_energy_mj"] == pytest.approx(1.5 * (a[10] - a[9]), rel=1e-9)

@@ -30,7 +30,14 @@ value is the finest level's, ``method = "finest level"``) when
   ladder has converged, the finest value is the answer, and the
   uncertainty is the largest difference seen.
 
-Two of those cases still bound the limit (``method = "bounded"``, value
+A ladder whose finest three levels differ by no more than the quantity's
+own resolution (``noise``: what the measurement itself cannot tell apart,
+e.g. a peak picked among computed points a step apart) has converged as far
+as it can be seen: ``method = "bounded"``, the finest level +- ``SAFETY``
+times the larger of the spread and the resolution, whatever the signs of
+its differences.
+
+Two of the other cases still bound the limit (``method = "bounded"``, value
 the finest level's, ``trusted`` True though ``asymptotic`` is False):
 oscillating differences that do not grow (``|q2 - q1| <= |q3 - q2|``,
 finest first), and an observed order above the plausible range (the
@@ -144,6 +151,7 @@ def richardson(
     p_range: tuple[float, float] = P_RANGE,
     safety: float = SAFETY,
     rtol_converged: float = 1e-9,
+    noise: float | None = None,
 ) -> LimitEstimate:
     """The converged value of ``q`` from its finest three levels, with the observed order.
 
@@ -157,6 +165,8 @@ def richardson(
     term the true limit falls inside U; the tests check it). The
     difference between the three-level and a two-level extrapolation is
     not used: with the observed order the two coincide by construction.
+    ``noise``: the quantity's resolution in its units (None or 0: none known); a ladder
+    whose finest three levels lie within it is bounded by it (module doc).
     """
     pairs = sorted(
         (float(hh), float(qq))
@@ -188,6 +198,13 @@ def richardson(
     def bounded(reason: str, order: float | None = None) -> LimitEstimate:
         why = f"{reason}; bounded by the finest three levels' spread (x {safety:g})"
         return LimitEstimate(finest, safety * spread, order, False, "bounded", why, finest, 3)
+
+    if noise and spread <= noise:
+        why = (
+            f"the finest three levels differ by {spread:.3g}, within the quantity's "
+            f"resolution {noise:.3g}; bounded by that resolution (x {safety:g})"
+        )
+        return LimitEstimate(finest, safety * noise, None, False, "bounded", why, finest, 3)
 
     if e21 == 0 or e32 == 0 or np.sign(e21) != np.sign(e32):
         why = "oscillating: the differences between the finest levels change sign"

@@ -152,8 +152,8 @@ def relative_errors(st: Setting, ref: Setting) -> dict[str, dict[str, float | No
     out: dict[str, dict[str, float | None]] = {}
     for cond, r in st.results.items():
         rr = ref.results.get(cond)
-        s = r.summary() if not r.branch.failed else {}
-        sr = rr.summary() if rr is not None and not rr.branch.failed else {}
+        s = r.refined_peak() if not r.branch.failed else {}
+        sr = rr.refined_peak() if rr is not None and not rr.branch.failed else {}
         out[cond] = {}
         for q, _, _ in QUANTITIES:
             _relative(s.get(q), sr.get(q), out[cond], q)
@@ -200,11 +200,23 @@ def is_ladder(knob: str, lad: list[Setting]) -> bool:
 
 def setting_value(st: Setting, cond: str, q: str) -> float | None:
     """Quantity ``q`` of setting ``st`` at condition ``cond``; None if missing, failed or
-    not finite."""
+    not finite. The peak between the computed points (``CaseResult.refined_peak``): the
+    highest computed point alone moves by up to half a step from level to level, which
+    no ladder should read as convergence."""
     r = st.results.get(cond)
     if r is None or r.branch.failed:
         return None
-    v = r.summary().get(q)
+    v = r.refined_peak().get(q)
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+def setting_resolution(st: Setting, cond: str, q: str) -> float | None:
+    """How finely setting ``st``'s curve at ``cond`` resolves quantity ``q`` (its units;
+    ``CaseResult.peak_resolution``); None if unknown."""
+    r = st.results.get(cond)
+    if r is None or r.branch.failed:
+        return None
+    v = r.peak_resolution().get(q)
     return None if v is None or not math.isfinite(v) else float(v)
 
 
@@ -214,7 +226,10 @@ def ladder_limits(
     """knob -> condition -> quantity -> :class:`LimitEstimate` from the knob's finest levels.
 
     Each knob's ladder (the other knobs at the base) is extrapolated with the
-    observed order (``workbench.post.extrapolation.richardson``). A knob with
+    observed order (``workbench.post.extrapolation.richardson``), given the
+    quantity's resolution on the finest three levels' curves
+    (:func:`setting_resolution`, the largest): differences within it bound
+    the limit instead. A knob with
     no fineness (rigid damper) or two levels only falls back to its finest
     level, flagged not asymptotic. ``skip``: the (knob, condition) pairs where
     the knob does not reach the condition's model (points per line on the
@@ -242,7 +257,12 @@ def ladder_limits(
                         v, None, None, False, "not applicable", NOT_APPLICABLE, v, 0
                     )
                 elif ladder:
-                    est = richardson(hs, vals)
+                    res = [setting_resolution(st, cond, q) for st in lad]
+                    finest3 = sorted(
+                        (h, r) for h, r, v in zip(hs, res, vals, strict=True) if v is not None
+                    )[:3]
+                    known = [r for _, r in finest3 if r is not None]
+                    est = richardson(hs, vals, noise=max(known) if known else None)
                 else:
                     v = vals[-1]
                     est = LimitEstimate(v, None, None, False, "finest level", NO_LADDER, v, 1)

@@ -50,6 +50,9 @@ def case_id(case) -> str:
     return f"{case.damper}-{case.phase_deg:g}deg-{case.force_n:g}N{v}".replace("=", "")
 
 
+_PEAK_KEYS = ("peak_frequency_hz", "peak_amplitude_mm", "friction_energy_mj")
+
+
 @dataclass
 class CaseResult:
     """One computed case and its frame (damper, phase, force, knobs, contact layout)."""
@@ -221,6 +224,54 @@ class CaseResult:
         out.update({f"share_{k}": v for k, v in self.status_shares().items()})
         out.update(self._peak_bound())
         return out
+
+    def refined_peak(self) -> dict[str, float | None]:
+        """The peak between the computed points: the vertex of the parabola a(f) through
+        the highest point and its two neighbours, and the frequency and the friction energy
+        (a parabola in f too) there. The summary's values where that gives no inner
+        maximum: an edge point, a fold at the top (f not monotone over the three points),
+        a curve that is not concave there."""
+        out = {k: self.summary().get(k) for k in _PEAK_KEYS}
+        i, n = self.peak_index, self.branch.n_points
+        if i <= 0 or i >= n - 1 or out["peak_amplitude_mm"] is None:
+            return out
+        j = np.array([i - 1, i, i + 1])
+        f, a = self.freq_hz[j], self.amp_mm[j]
+        df = np.diff(f)
+        if not (np.all(df > 0) or np.all(df < 0)):
+            return out
+        ca = np.polyfit(f - f[1], a, 2)
+        if ca[0] >= 0:
+            return out
+        t = float(np.clip(-ca[1] / (2 * ca[0]), min(f) - f[1], max(f) - f[1]))
+        out["peak_amplitude_mm"] = float(np.polyval(ca, t))
+        out["peak_frequency_hz"] = float(f[1] + t)
+        if out["friction_energy_mj"] is not None:
+            e = np.array([float(self.energy_mj[k].sum()) for k in j])
+            out["friction_energy_mj"] = max(0.0, float(np.polyval(np.polyfit(f - f[1], e, 2), t)))
+        return out
+
+    def peak_resolution(self) -> dict[str, float | None]:
+        """How finely the computed points resolve the peak: per summary quantity, the
+        change a different choice of peak point within the curve's step could make.
+
+        The peak is the highest computed point ``i``, so its frequency is known to half
+        the step to its neighbours, ``max |f(i +- 1) - f(i)| / 2``; its amplitude to the
+        rise a parabola through the three points could add, ``(2 a_i - a_{i-1} -
+        a_{i+1}) / 8`` (exact for a parabola sampled at equal steps); the friction energy
+        at it to half its change to the neighbours. None where the peak has no neighbour
+        on both sides (an edge point: not covered).
+        """
+        i, n = self.peak_index, self.branch.n_points
+        if i <= 0 or i >= n - 1:
+            return dict.fromkeys(_PEAK_KEYS)
+        f, a = self.freq_hz, self.amp_mm
+        e = [float(self.energy_mj[j].sum()) for j in (i - 1, i, i + 1)]
+        return {
+            "peak_frequency_hz": 0.5 * float(max(abs(f[i + 1] - f[i]), abs(f[i] - f[i - 1]))),
+            "peak_amplitude_mm": max(0.0, float(2 * a[i] - a[i - 1] - a[i + 1]) / 8.0),
+            "friction_energy_mj": 0.5 * max(abs(e[2] - e[1]), abs(e[1] - e[0])),
+        }
 
     def _energy_at(self, i: int) -> dict[str, Any]:
         """Friction energy per cycle at point ``i``; a negative loop integral (time

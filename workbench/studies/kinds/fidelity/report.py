@@ -37,7 +37,7 @@ def condition_rows(settings: list[Setting]) -> list[dict[str, Any]]:
     rows = []
     for st in settings:
         for cond, r in st.results.items():
-            s = r.summary()
+            s = r.refined_peak()
             row = {"label": st.label, "role": st.role, "condition": cond, "failed": r.branch.failed}
             for q, _, _ in QUANTITIES:
                 row[q] = s.get(q)
@@ -343,7 +343,7 @@ def _base_section(
         marks["production_time_s"] = production.time_s
     fig = plot_base_vs_limit(points, marks, out / "figures" / "fidelity_base_vs_limit.png")
     per_knob = plot_base_per_knob(table, out / "figures" / "fidelity_base_per_knob.png")
-    return base_section(out, base, summary, conds, [fig, per_knob])
+    return base_section(out, table, summary, conds, [fig, per_knob])
 
 
 def _limits_section(summary: dict[str, Any], tables: Path) -> dict[str, Any]:

@@ -203,13 +203,13 @@ def _cell(d: dict[str, Any]) -> str:
 
 def base_section(
     out: Path,
-    base: Setting,
+    table: dict[str, dict[str, dict[str, Any]]],
     summary: dict[str, Any],
     conditions: list[str],
     figures: list[Path],
 ) -> dict[str, Any]:
-    """Write the tables and return the report section "the base against the limit"."""
-    table = base_vs_limit(base, summary, conditions)
+    """Write the tables of :func:`base_vs_limit`'s ``table`` and return the report section
+    "the base against the limit"."""
     tables = out / "tables"
     write_json(
         tables / "fidelity_base_vs_limit.json",
