@@ -37,7 +37,7 @@ as it can be seen: ``method = "bounded"``, the finest level +- ``SAFETY``
 times the larger of the spread and the resolution, whatever the signs of
 its differences.
 
-Two of the other cases still bound the limit (``method = "bounded"``, value
+With three levels, two of the other cases still bound the limit (``method = "bounded"``, value
 the finest level's, ``trusted`` True though ``asymptotic`` is False):
 oscillating differences that do not grow (``|q2 - q1| <= |q3 - q2|``,
 finest first), and an observed order above the plausible range (the
@@ -50,6 +50,21 @@ half the spread; this takes 1.25 times the whole of it). Growing
 oscillations, no fitting power law and orders below the range stay
 untrusted: the ladder may be diverging or pre-asymptotic, and nothing
 bounds it.
+
+A ladder of four or more levels that the three-level estimate cannot read
+(no power law through the finest three, an oscillation, an order outside
+the range: typically scatter of a few tenths of a percent on
+unstructured meshes, which re-place the nodes at every size) is fitted by
+least squares over all its levels instead (:func:`least_squares`, after
+Eca and Hoekstra, "A procedure for the estimation of the numerical
+uncertainty of CFD calculations based on grid refinement studies", J.
+Comput. Phys. 2014): ``q0 + C h^p`` at the better of p = 1 and p = 2; the
+uncertainty adds the fit's standard deviation, its miss at the finest
+level and the distance between the two orders' limits to the correction,
+and is tripled (scaled by the scatter) when the scatter exceeds the data's
+mean step (``method = "least squares"``, trusted, not ``asymptotic``).
+Levels whose best order is the range's lowest (slow convergence or none,
+as a point load's log(1/h)) are not fitted.
 
 No library of this package is imported here (plain numpy).
 """
@@ -90,8 +105,14 @@ class LimitEstimate:
 
     @property
     def trusted(self) -> bool:
-        """Extrapolated (``asymptotic``) or bounded by the finest levels' spread."""
-        return self.asymptotic or self.method == "bounded"
+        """Extrapolated (``asymptotic``), fitted over four or more levels, or bounded by
+        the finest levels' spread."""
+        return self.asymptotic or self.method in ("bounded", "least squares")
+
+    @property
+    def corrects(self) -> bool:
+        """Whether ``value`` is an estimate beyond the finest level (a correction to add)."""
+        return self.method in ("richardson", "least squares")
 
     def as_dict(self) -> dict:
         return dict(asdict(self), trusted=self.trusted)
@@ -144,6 +165,66 @@ def observed_order(h: Sequence[float], q: Sequence[float]) -> float | None:
     return 0.5 * (lo + hi)
 
 
+def _fit(h: np.ndarray, q: np.ndarray, p: float) -> tuple[float, float, float]:
+    """Least squares q = q0 + c h^p at a fixed p: (q0, c, residual sum of squares)."""
+    A = np.column_stack([np.ones_like(h), h**p])
+    (q0, c), *_ = np.linalg.lstsq(A, q, rcond=None)
+    r = q - A @ np.array([q0, c])
+    return float(q0), float(c), float(r @ r)
+
+
+def least_squares(
+    h: Sequence[float],
+    q: Sequence[float],
+    *,
+    p_range: tuple[float, float] = P_RANGE,
+    safety: float = SAFETY,
+    reason: str = "",
+) -> LimitEstimate | None:
+    """The limit of ``q`` fitted over all its levels (four or more; None with fewer, or
+    when the levels do not converge).
+
+    Four scattered levels cannot fix an order as well as a limit, so the order is
+    not fitted: ``q0 + c h^p`` is fitted at p = 1 and at p = 2 (the orders that
+    bracket the knobs here), and the better fit is kept. With ``eps = |q_finest - q0|``,
+    ``sigma`` the fit's standard deviation, ``miss = |q_finest - fit(h_finest)|`` and
+    ``spread`` the distance between the two fits' limits, the uncertainty is
+    ``safety eps + sigma + miss + spread`` where the scatter is below the data's mean
+    step ``Delta = (max q - min q) / (n - 1)``, else ``3 sigma / Delta`` times the same
+    sum (after Eca and Hoekstra 2014, who also fall back on fixed orders). A ladder
+    whose best free order (scanned over ``p_range``) is its lowest converges too slowly
+    or not at all (a point load's log(1/h)): None. ``reason``: why the three-level
+    estimate did not do.
+    """
+    pairs = sorted(zip((float(x) for x in h), (float(y) for y in q), strict=True))
+    n = len(pairs)
+    if n < 4:
+        return None
+    hh = np.array([a for a, _ in pairs])
+    qq = np.array([b for _, b in pairs])
+    x = hh / hh[0]  # fineness relative to the finest level: well-scaled powers
+    grid = np.exp(np.linspace(np.log(p_range[0]), np.log(p_range[1]), 200))
+    if int(np.argmin([_fit(x, qq, p)[2] for p in grid])) == 0:
+        return None  # the data want an order at or below the range: no convergence to fit
+    delta = float(qq.max() - qq.min()) / (n - 1)
+    if delta == 0.0:
+        return None
+    fits = {p: _fit(x, qq, p) for p in (1.0, 2.0)}
+    p = min(fits, key=lambda o: fits[o][2])
+    q0, c, r2 = fits[p]
+    sigma = math.sqrt(r2 / (n - 2))
+    eps = abs(qq[0] - q0)
+    miss = abs(qq[0] - (q0 + c))
+    spread = abs(fits[1.0][0] - fits[2.0][0])
+    total = eps + sigma + miss + spread
+    unc = safety * eps + sigma + miss + spread if sigma < delta else 3.0 * sigma / delta * total
+    why = (
+        f"{reason}; fitted by least squares over {n} levels (order {p:g} of 1 and 2, "
+        f"scatter {sigma:.3g} against a mean step {delta:.3g})"
+    ).lstrip("; ")
+    return LimitEstimate(float(q0), float(unc), p, False, "least squares", why, float(qq[0]), n)
+
+
 def richardson(
     h: Sequence[float],
     q: Sequence[float | None],
@@ -182,6 +263,14 @@ def richardson(
     def fallback(reason: str, order: float | None = None, unc: float | None = None):
         return LimitEstimate(finest, unc, order, False, "finest level", reason, finest, n)
 
+    def unread(reason: str, order: float | None = None) -> LimitEstimate:
+        """The finest three levels cannot be read: all of them fitted, if four or more."""
+        fit = least_squares(
+            [a for a, _ in pairs], [b for _, b in pairs], p_range=p_range, safety=safety,
+            reason=reason,
+        )  # fmt: skip
+        return fit if fit is not None else fallback(reason, order)
+
     if n < 3:
         return fallback(f"{n} level(s) with a value: three are needed for an observed order")
     hh = np.array(hs[:3])
@@ -208,20 +297,22 @@ def richardson(
 
     if e21 == 0 or e32 == 0 or np.sign(e21) != np.sign(e32):
         why = "oscillating: the differences between the finest levels change sign"
+        if n >= 4:
+            return unread(why)
         if abs(e21) <= abs(e32):
             return bounded(why)
-        return fallback(why + ", and grow as the levels get finer")
+        return unread(why + ", and grow as the levels get finer")
     p = observed_order(hh, qq)
     if p is None:
-        return fallback("no power law fits the finest three levels")
+        return unread("no power law fits the finest three levels")
     if p > p_range[1]:
-        return bounded(
+        why = (
             f"observed order {p:.3g} above the plausible {p_range[1]:g}: the differences "
-            "shrink faster than a power law",
-            order=p,
+            "shrink faster than a power law"
         )
+        return unread(why, order=p) if n >= 4 else bounded(why, order=p)
     if p < p_range[0]:
-        return fallback(
+        return unread(
             f"observed order {p:.3g} outside the plausible {p_range[0]:g}..{p_range[1]:g}: "
             "the levels are not in the asymptotic range",
             order=p,
@@ -232,4 +323,4 @@ def richardson(
     return LimitEstimate(q0, unc, float(p), True, "richardson", "", finest, 3)
 
 
-__all__ = ["P_RANGE", "SAFETY", "LimitEstimate", "observed_order", "richardson"]
+__all__ = ["P_RANGE", "SAFETY", "LimitEstimate", "least_squares", "observed_order", "richardson"]

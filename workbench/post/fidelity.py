@@ -315,10 +315,10 @@ def combined_limits(
                     asym, trusted, unc = False, False, None
                     why.append(f"{knob}: {est.reason if est is not None else 'no value'}")
                     continue
-                if not est.asymptotic:  # bounded: no correction, its bound widens the band
+                if not est.asymptotic:  # bounded or fitted: no longer asymptotic
                     asym = False
                     bound.append(knob)
-                elif v is not None:
+                if est.corrects and v is not None:  # bounded: no correction, only its band
                     v += est.value - est.finest
                 if unc is not None:
                     unc += est.uncertainty

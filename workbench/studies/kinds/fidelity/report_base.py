@@ -191,10 +191,10 @@ def _cell(d: dict[str, Any]) -> str:
         bad = [k for k, v in d["knobs"].items() if v["error_vs_limit_pct"] is None]
         head = "no trusted limit" + (f" ({', '.join(bad)} not trusted)" if bad else "")
     if e is not None and d["bounded"]:
-        head += f" (bounded, not extrapolated: {', '.join(d['bounded'])})"
+        head += f" (not from three levels: {', '.join(d['bounded'])})"
+    tag = {"bounded": " (bound)", "least squares": " (least squares)"}
     per = [
-        f"{k} {_pm(v['error_vs_limit_pct'], v['uncertainty_pct'])}"
-        + (" (bound)" if v["method"] == "bounded" else "")
+        f"{k} {_pm(v['error_vs_limit_pct'], v['uncertainty_pct'])}" + tag.get(v["method"], "")
         for k, v in d["knobs"].items()
         if v["error_vs_limit_pct"] is not None
     ]
@@ -220,9 +220,10 @@ def base_section(
             "production_geometry": summary.get("production_geometry", ""),
             "note": "errors and uncertainties in percent of the limit; limit and uncertainty "
             "in the quantity's unit; None where the limit is not trusted (trusted false); "
-            "asymptotic: every knob extrapolated; bounded: the knobs whose limit is only "
-            "bounded by their finest levels' spread (no correction, their bound in the "
-            "uncertainty)",
+            "asymptotic: every knob extrapolated from its finest three levels; bounded: the "
+            "knobs whose limit is instead bounded by their finest levels' spread (no "
+            "correction, their bound in the uncertainty) or fitted by least squares over "
+            "four or more levels",
             "cases": table,
         },
     )
@@ -233,9 +234,9 @@ def base_section(
         + ") against the extrapolated limit of every knob at once, per case: error in "
         "percent of the limit, +- the limit's uncertainty. 'no trusted limit': some knob's "
         "finest levels neither extrapolate nor bound a limit for that case and quantity (the "
-        "table says which and why), so no error against a limit is given; 'bounded': a "
-        "knob's finest levels oscillate or converge faster than a power law, so its limit "
-        "is bounded by their spread instead of extrapolated. The table also gives, per knob, "
+        "table says which and why), so no error against a limit is given; 'not from three "
+        "levels': a knob whose limit is bounded by its finest levels' spread or fitted by "
+        "least squares over all its levels (docs/STUDIES.md). The table also gives, per knob, "
         "the base's error against that knob's own limit (the other knobs at the base), and "
         "the base's error against the reference (every knob at its finest level: a measured "
         "difference, not a limit).",
