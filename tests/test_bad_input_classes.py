@@ -583,6 +583,8 @@ def _path_arguments() -> list[tuple[str, list[str]]]:
     out.append(("report --screenshot", ["report", "r", "--screenshot", f"s{FF}.png"]))
     for command in ("mesh", "modes", "reduce", "study", "screen", "nlmodes", "disk"):
         out.append((f"{command} --geometry", ["--geometry", f"g{FF}.toml"]))
+    for command in ("study", "screen", "nlmodes"):  # the fidelity study's production model
+        out.append((f"{command} --production-geometry", ["--production-geometry", f"p{FF}.toml"]))
     for command in ("modes", "reduce", "disk"):
         out.append((f"{command} --contact-file", ["--contact-file", f"c{FF}.toml"]))
     out.append(("disk --disk-file", ["--disk-file", f"d{FF}.toml"]))

@@ -243,16 +243,26 @@ def test_peak_resolution_of_a_sampled_parabola():
     )
     fake.summary = lambda: {"peak_frequency_hz": 400.0, "peak_amplitude_mm": a[10],
                             "friction_energy_mj": 3 * a[10]}  # fmt: skip
-    fake.peak_resolution = lambda: CaseResult.peak_resolution(fake)
+    fake.refined_peak = lambda: CaseResult.refined_peak(fake)
     top = CaseResult.refined_peak(fake)  # the parabola's vertex, from the three top points
     assert top["peak_frequency_hz"] == pytest.approx(400.3, abs=2e-3)
     assert top["peak_amplitude_mm"] == pytest.approx(1.0, abs=1e-6)
     assert top["friction_energy_mj"] == pytest.approx(3.0, abs=3e-6)
+    # refined: the resolution is how far the interpolation moved each quantity
     r = CaseResult.peak_resolution(fake)
+    assert r["peak_frequency_hz"] == pytest.approx(0.3, abs=2e-3)
+    assert r["peak_amplitude_mm"] == pytest.approx(0.0009, abs=1e-6)
+    assert r["friction_energy_mj"] == pytest.approx(3 * 0.0009, abs=3e-6)
+    # not refined (a fold at the top: f not monotone): the highest point's own resolution
+    fold = NS(**vars(fake))
+    fold.freq_hz = f.copy()
+    fold.freq_hz[11] = 399.5
+    fold.summary = lambda: {"peak_frequency_hz": 400.0, "peak_amplitude_mm": a[10],
+                            "friction_energy_mj": 3 * a[10]}  # fmt: skip
+    fold.refined_peak = lambda: CaseResult.refined_peak(fold)
+    r = CaseResult.peak_resolution(fold)
     assert r["peak_frequency_hz"] == 0.5
-    assert r["peak_amplitude_mm"] == pytest.approx(2.0 / 100.0 / 8.0, rel=1e-9)
-    assert 0.3 <= r["peak_frequency_hz"] and 0.0009 <= r["peak_amplitude_mm"]
-    # energy: half its largest change to a neighbour (3 a here)
+    assert r["peak_amplitude_mm"] == pytest.approx((2 * a[10] - a[9] - a[11]) / 8.0, rel=1e-9)
     assert r["friction_energy_mj"] == pytest.approx(1.5 * (a[10] - a[9]), rel=1e-9)
 
 

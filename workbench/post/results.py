@@ -252,19 +252,26 @@ class CaseResult:
         return out
 
     def peak_resolution(self) -> dict[str, float | None]:
-        """How finely the computed points resolve the peak: per summary quantity, the
-        change a different choice of peak point within the curve's step could make.
+        """How finely the computed points resolve the peak, per summary quantity (units).
 
-        The peak is the highest computed point ``i``, so its frequency is known to half
-        the step to its neighbours, ``max |f(i +- 1) - f(i)| / 2``; its amplitude to the
-        rise a parabola through the three points could add, ``(2 a_i - a_{i-1} -
-        a_{i+1}) / 8`` (exact for a parabola sampled at equal steps); the friction energy
-        at it to half its change to the neighbours. None where the peak has no neighbour
-        on both sides (an edge point: not covered).
+        Where :meth:`refined_peak` placed the peak between the points, the distance it
+        moved each quantity from the highest computed point: the interpolation's own
+        error is of the order of that correction (smaller on a smooth peak, as large on
+        a kinked one). Elsewhere the highest point's own resolution: half the step to a
+        neighbour in frequency, the rise a parabola through the three points could add
+        to the amplitude (``(2 a_i - a_{i-1} - a_{i+1}) / 8``, exact at equal steps), half
+        the energy's change to a neighbour. None where the peak has no neighbour on both
+        sides (an edge point: not covered).
         """
         i, n = self.peak_index, self.branch.n_points
         if i <= 0 or i >= n - 1:
             return dict.fromkeys(_PEAK_KEYS)
+        top, at = self.refined_peak(), self.summary()
+        if top["peak_frequency_hz"] != at["peak_frequency_hz"]:
+            return {
+                k: None if top[k] is None or at[k] is None else abs(top[k] - at[k])
+                for k in _PEAK_KEYS
+            }
         f, a = self.freq_hz, self.amp_mm
         e = [float(self.energy_mj[j].sum()) for j in (i - 1, i, i + 1)]
         return {

@@ -518,7 +518,8 @@ def plot_base_per_knob(table: dict[str, dict[str, dict[str, Any]]], path: str | 
     labels.append("not trusted: no limit, no error")
     fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=7, frameon=False)
     fig.suptitle(
-        "the base against each knob's own Richardson limit (the other knobs at the base), "
+        "the base against each knob's own limit (Richardson, least squares or a bound; the "
+        "other knobs at the base), "
         "+- that limit's uncertainty",
         fontsize=10,
     )
