@@ -85,6 +85,7 @@ def test_implausible_order_is_flagged():
 def test_round_off_and_too_few_levels():
     est = richardson([1.0, 2.0, 4.0], [3.0, 3.0 + 1e-13, 3.0 - 1e-13])
     assert not est.asymptotic and "round-off" in est.reason and est.value == 3.0
+    assert est.trusted and est.method == "bounded"  # converged: the finest value stands
     assert est.uncertainty == pytest.approx(2e-13, rel=1e-3)
     est = richardson([1.0, 2.0, 4.0], [3.0, None, float("nan")])
     assert not est.asymptotic and est.value == 3.0 and "three are needed" in est.reason

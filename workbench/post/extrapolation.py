@@ -28,7 +28,8 @@ value is the finest level's, ``method = "finest level"``) when
   differences are dominated by noise or a lucky cancellation;
 * the differences are at round-off (relative ``rtol_converged``): the
   ladder has converged, the finest value is the answer, and the
-  uncertainty is the largest difference seen.
+  uncertainty is the largest difference seen (``method = "bounded"``,
+  trusted: nothing is closer to converged).
 
 A ladder whose finest three levels differ by no more than the quantity's
 own resolution (``noise``: what the measurement itself cannot tell apart,
@@ -278,9 +279,9 @@ def richardson(
     e21, e32 = qq[1] - qq[0], qq[2] - qq[1]
     scale = max(abs(qq).max(), np.finfo(float).tiny)
     if max(abs(e21), abs(e32)) <= rtol_converged * scale:
-        return fallback(
-            f"converged to round-off: the finest levels agree within {rtol_converged:g} (relative)",
-            unc=float(max(abs(e21), abs(e32))),
+        why = f"converged to round-off: the finest levels agree within {rtol_converged:g}"
+        return LimitEstimate(
+            finest, float(max(abs(e21), abs(e32))), None, False, "bounded", why, finest, 3
         )
     spread = float(qq.max() - qq.min())
 
