@@ -341,8 +341,11 @@ def plot_base_vs_limit(
     extra = iter(_EXTRA_COLORS)
     gcol = {g: KNOB_COLORS.get(g) or next(extra, "#7f7f7f") for g in groups}
     gcol["reference"] = "0.45"
-    all_cases = list(dict.fromkeys(c for q in qs for c, _, _ in base[q]))
-    all_cases += [c for q in qs for c in base["untrusted"][q] if c not in all_cases]
+    all_cases = list(
+        dict.fromkeys(
+            [c for q in qs for c, _, _ in base[q]] + [c for q in qs for c in base["untrusted"][q]]
+        )
+    )
     colors = force_colors([_force_of(c) for c in all_cases])
     styles = _case_styles(all_cases)
     handles: dict[str, Any] = {}
@@ -419,10 +422,12 @@ def plot_base_vs_limit(
             ax.set_yticks([])
         bad = base["untrusted"][q]
         if bad:
+            n_all = len(all_cases)
+            names = "\n".join(bad) if len(bad) <= 4 else "(the report names them)"
             ax.text(
                 0.02,
                 0.98,
-                "no trusted limit (no error given):\n" + "\n".join(bad),
+                f"no trusted limit for {len(bad)} of {n_all} cases (no error given):\n" + names,
                 transform=ax.transAxes,
                 fontsize=7,
                 va="top",
