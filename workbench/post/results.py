@@ -225,16 +225,28 @@ class CaseResult:
         out.update(self._peak_bound())
         return out
 
+    def _peak_point(self) -> dict[str, float | None]:
+        """The summary's peak values (the highest computed point; None where the curve does
+        not cover its peak, :attr:`peak_covered`) without computing the rest of it."""
+        if not self.peak_covered:
+            return dict.fromkeys(_PEAK_KEYS)
+        i = self.peak_index
+        return {
+            "peak_frequency_hz": float(self.freq_hz[i]),
+            "peak_amplitude_mm": float(self.amp_mm[i]),
+            "friction_energy_mj": self._energy_at(i)["friction_energy_mj"],
+        }
+
     def refined_peak(self) -> dict[str, float | None]:
         """The peak between the computed points: the vertex of the parabola a(f) through
         the highest point and its two neighbours, and the frequency and the friction energy
         (a parabola in f too) there. The summary's values where that gives no inner
         maximum: an edge point, a fold at the top (f not monotone over the three points),
         a curve that is not concave there."""
-        out = {k: self.summary().get(k) for k in _PEAK_KEYS}
-        i, n = self.peak_index, self.branch.n_points
-        if i <= 0 or i >= n - 1 or out["peak_amplitude_mm"] is None:
+        out = self._peak_point()
+        if out["peak_amplitude_mm"] is None:  # not covered: no inner highest point
             return out
+        i = self.peak_index
         j = np.array([i - 1, i, i + 1])
         f, a = self.freq_hz[j], self.amp_mm[j]
         df = np.diff(f)
@@ -266,7 +278,7 @@ class CaseResult:
         i, n = self.peak_index, self.branch.n_points
         if i <= 0 or i >= n - 1:
             return dict.fromkeys(_PEAK_KEYS)
-        top, at = self.refined_peak(), self.summary()
+        top, at = self.refined_peak(), self._peak_point()
         if top["peak_frequency_hz"] != at["peak_frequency_hz"]:
             return {
                 k: None if top[k] is None or at[k] is None else abs(top[k] - at[k])
