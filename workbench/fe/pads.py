@@ -108,6 +108,16 @@ def rigid_penalty(r: np.ndarray) -> np.ndarray:
     return np.eye(3 * k) - Q @ Q.T
 
 
+def _block_entries(blocks: list[tuple[np.ndarray, np.ndarray]]):
+    """``(rows, cols, vals)`` of dense blocks given as ``(dofs, block)`` (COO triplets;
+    entries of blocks that share a DOF are summed where the matrix is built)."""
+    if not blocks:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0)
+    rows = np.concatenate([np.repeat(d, len(d)) for d, _ in blocks])
+    cols = np.concatenate([np.tile(d, len(d)) for d, _ in blocks])
+    return rows, cols, np.concatenate([b.ravel() for _, b in blocks])
+
+
 def penalty_alpha(diagonal: np.ndarray) -> float:
     """The tie's stiffness: ``ALPHA`` times the median of the body's positive diagonal
     stiffness entries (clamped rows, set to 1, left out)."""
@@ -136,21 +146,15 @@ def pad_penalty(
     import scipy.sparse as sp
 
     members = pad_members(coords, points, frames, weight, kind, width)
-    rows, cols, vals = [], [], []
+    blocks = []
     for c, mem in zip(np.asarray(centers, dtype=np.int64), members, strict=True):
         g = np.concatenate([[c], mem[mem != c]])
-        if len(g) < 2:
-            continue
-        d = (3 * g[:, None] + np.arange(3)[None, :]).ravel()
-        rows.append(np.repeat(d, len(d)))
-        cols.append(np.tile(d, len(d)))
-        vals.append((alpha * rigid_penalty(coords[g] - coords[c])).ravel())
+        if len(g) > 1:
+            d = (3 * g[:, None] + np.arange(3)[None, :]).ravel()
+            blocks.append((d, alpha * rigid_penalty(coords[g] - coords[c])))
     n = 3 * len(coords)
-    if not rows:
-        return sp.csr_matrix((n, n))
-    return sp.csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n)
-    )
+    rows, cols, vals = _block_entries(blocks)
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
 
 
 def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
@@ -164,6 +168,7 @@ def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
     (``K + P``: inserting the pads' new entries into ``K`` itself reallocates row after
     row, 90 % of a reduction's time on the paper-like rig). Returns counts.
     """
+    import scipy.sparse as sp
     from petsc4py import PETSc
 
     comm = body.comm
@@ -189,30 +194,23 @@ def tie_pads(body, nodes, contact, width_m: float) -> dict[str, float]:
         n_tied += len(g) - 1
         if len(g) < 2:
             continue
-        rows = (3 * g[:, None] + np.arange(3)[None, :]).ravel()
-        blocks.append((rows, alpha * rigid_penalty(x - x[0])))
-    # the rows this rank owns, each with its columns summed over the pads that touch it
-    entries: dict[int, dict[int, float]] = {}
-    for rows, P in blocks:
-        for a in np.flatnonzero((rows >= lo) & (rows < hi)):
-            row = entries.setdefault(int(rows[a]), {})
-            for c, v in zip(rows.tolist(), P[a].tolist(), strict=True):
-                row[c] = row.get(c, 0.0) + v
-    if comm.allreduce(len(entries)) == 0:
-        return {"pad_nodes": n_tied, "pad_alpha": alpha, "pad_nodes_per_pair": 0.0}
+        dofs = (3 * g[:, None] + np.arange(3)[None, :]).ravel()
+        blocks.append((dofs, alpha * rigid_penalty(x - x[0])))
+    # the rows this rank owns (CSR, columns sorted, the pads that share an entry summed)
     (rl, rg), (cl, cg) = K.getSizes()
-    ptr = np.zeros(hi - lo + 1, dtype=PETSc.IntType)
-    cols: list[int] = []
-    vals: list[float] = []
-    for r in range(lo, hi):
-        row = entries.get(r, {})
-        ks = sorted(row)
-        cols.extend(ks)
-        vals.extend(row[k] for k in ks)
-        ptr[r - lo + 1] = ptr[r - lo] + len(ks)
+    rows, cols, vals = _block_entries(blocks)
+    own = (rows >= lo) & (rows < hi)
+    local = sp.csr_matrix((vals[own], (rows[own] - lo, cols[own])), shape=(hi - lo, cg))
+    local.sum_duplicates()
+    if comm.allreduce(local.nnz) == 0:
+        return {"pad_nodes": n_tied, "pad_alpha": alpha, "pad_nodes_per_pair": 0.0}
     P = PETSc.Mat().createAIJ(
         ((rl, rg), (cl, cg)),
-        csr=(ptr, np.asarray(cols, dtype=PETSc.IntType), np.asarray(vals, dtype=float)),
+        csr=(
+            local.indptr.astype(PETSc.IntType),
+            local.indices.astype(PETSc.IntType),
+            local.data,
+        ),
         comm=comm,
     )
     P.assemble()
