@@ -18,18 +18,8 @@ from typing import Any
 
 from ..io import digest
 from .extrapolation import LimitEstimate, richardson
+from .knobs import KNOBS
 from .results import CaseResult
-
-KNOBS = (
-    "mesh-size",
-    "contact-mesh-size",
-    "modes",
-    "harmonics",
-    "nt",
-    "points-per-line",
-    "rigid-damper",
-)
-
 
 QUANTITIES = (
     ("peak_amplitude_mm", "peak amplitude", "mm"),

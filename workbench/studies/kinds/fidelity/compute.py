@@ -63,7 +63,6 @@ from ....errors import InputError
 from ....io import digest, write_json
 from ....log import bars_enabled, progress_bar
 from ....post.fidelity import (
-    KNOBS,
     STAGES,
     Setting,
     combined_limits,
@@ -77,6 +76,7 @@ from ....post.fidelity import (
     relative_errors,
     setting_row,
 )
+from ....post.knobs import KNOBS
 from ....post.pareto import pareto_front, pick_cheapest
 from ....post.results import CaseResult
 from ...engine.outputs import write_manifest_and_report

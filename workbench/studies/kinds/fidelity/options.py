@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ....errors import InputError
+from ....post.knobs import KNOBS
 from ....study_options import option
 
 
@@ -36,15 +37,7 @@ class FidelityOptions:
         "knobs a fidelity study varies, one at a time about the base setting (the study's "
         "own mesh-size, modes, ...)",
         "fidelity",
-        choices=(
-            "mesh-size",
-            "contact-mesh-size",
-            "modes",
-            "harmonics",
-            "nt",
-            "points-per-line",
-            "rigid-damper",
-        ),
+        choices=KNOBS,
     )
     damper_phases: list[str] = option(
         "strs",

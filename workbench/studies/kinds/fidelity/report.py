@@ -15,7 +15,6 @@ from typing import Any
 from ....io import write_json
 from ....io.csv_rows import write_rows_csv
 from ....post.fidelity import (
-    KNOBS,
     NO_LADDER,
     NOT_APPLICABLE,
     QUANTITIES,
@@ -25,6 +24,7 @@ from ....post.fidelity import (
     level_label,
     limit_uncertainty_pct,
 )
+from ....post.knobs import KNOBS
 
 
 def write_csv(path: Path, rows: list[dict[str, Any]], cols: list[str] | None = None) -> Path:
