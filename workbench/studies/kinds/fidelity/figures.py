@@ -365,7 +365,6 @@ def plot_base_vs_limit(
                 )
                 handles.setdefault(f"{g} (worst case)", h)
                 drawn = True
-        n = len(base[q])
         # the lowest error drawn: a band reaching zero (uncertainty >= error) ends a third
         # of it lower, with an arrow down (a log axis has no zero)
         ys = [_floor(p.get(q))[0] for p in points] + [
@@ -373,47 +372,16 @@ def plot_base_vs_limit(
         ]
         ys = [y for y in ys if y is not None]
         bottom = min(ys) / 3.0 if ys else ERR_FLOOR
-        for i, (case, e, u) in enumerate(base[q]):
-            x = base["time_s"] * 1.07 ** (i - (n - 1) / 2)
-            y = max(e, ERR_FLOOR)
-            u = u or 0.0
-            to_zero = y - u <= bottom
-            lo = y - bottom if to_zero else u
-            col = colors[_force_of(case)]
-            h = ax.errorbar(
-                [x],
-                [y],
-                yerr=[[lo], [u]],
-                marker=styles[case][1],
-                ms=8,
-                color=col,
-                mec="black",
-                capsize=3,
-                ls="none",
-                zorder=4,
-            )
-            if to_zero:
-                ax.plot([x], [bottom], marker="v", ms=5, color=col, zorder=4)
-            handles.setdefault(f"base: {case}", h)
-            drawn = True
-        for i, (case, e, u) in enumerate(prod.get(q, [])):
-            x = base["production_time_s"] * 1.07 ** (i - (len(prod[q]) - 1) / 2)
-            y = max(e, ERR_FLOOR)
-            u = u or 0.0
-            h = ax.errorbar(
-                [x],
-                [y],
-                yerr=[[min(u, y - bottom)], [u]],
-                marker=styles[case][1],
-                ms=8,
-                color=colors[_force_of(case)],
-                mfc="white",
-                mec=colors[_force_of(case)],
-                capsize=3,
-                ls="none",
-                zorder=4,
-            )
-            handles.setdefault("production model (hollow), per case", h)
+        for marks, t0, label, hollow in (
+            (base[q], base["time_s"], "base: {}", False),
+            (prod.get(q, []), base.get("production_time_s"), "production model (hollow)", True),
+        ):
+            for i, (case, e, u) in enumerate(marks):
+                x = t0 * 1.07 ** (i - (len(marks) - 1) / 2)
+                h = _case_bar(ax, x, e, u, bottom, styles[case][1], colors[_force_of(case)],
+                              hollow=hollow)  # fmt: skip
+                handles.setdefault(label.format(case), h)
+                drawn = True
             drawn = True
         if drawn:
             _log_axes(ax)
@@ -455,6 +423,21 @@ def plot_base_vs_limit(
     rows = math.ceil(len(handles) / min(5, max(1, len(handles))))
     fig.tight_layout(rect=(0, 0.04 + 0.035 * rows, 1, 0.95))
     return save_figure(fig, path)
+
+
+def _case_bar(ax, x, e, u, bottom, marker, color, hollow=False):
+    """One case's error against the limit at ``x``, +- ``u`` (percent): a band that
+    reaches zero ends at ``bottom`` with an arrow down (a log axis has no zero); hollow
+    for the production model, edged black for the base."""
+    y = max(e, ERR_FLOOR)
+    u = u or 0.0
+    to_zero = y - u <= bottom
+    face = {"mfc": "white", "mec": color} if hollow else {"mec": "black"}
+    h = ax.errorbar([x], [y], yerr=[[y - bottom if to_zero else u], [u]], marker=marker, ms=8,
+                    color=color, capsize=3, ls="none", zorder=4, **face)  # fmt: skip
+    if to_zero:
+        ax.plot([x], [bottom], marker="v", ms=5, color=color, zorder=4)
+    return h
 
 
 @styled
