@@ -124,39 +124,33 @@ def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
     out = []
     for cond, qs in table.items():
         for q, d in qs.items():
-            out.append(
-                {
-                    "condition": cond,
-                    "quantity": q,
-                    "limit of": "all knobs",
-                    "base": d["base"],
-                    "limit": d["limit"],
-                    "uncertainty": d["uncertainty"],
-                    "error vs limit %": d["error_vs_limit_pct"],
-                    "uncertainty %": d["uncertainty_pct"],
-                    "trusted": d["trusted"],
-                    "bounded by": ", ".join(d["bounded"]),
-                    "error vs reference %": d["error_vs_reference_pct"],
-                    "why not trusted": d["reason"],
-                }
-            )
+            every = {
+                "condition": cond,
+                "quantity": q,
+                "limit of": "all knobs",
+                "base": d["base"],
+                "limit": d["limit"],
+                "uncertainty": d["uncertainty"],
+                "error vs limit %": d["error_vs_limit_pct"],
+                "uncertainty %": d["uncertainty_pct"],
+                "trusted": d["trusted"],
+                "bounded by": ", ".join(d["bounded"]),
+                "error vs reference %": d["error_vs_reference_pct"],
+                "why not trusted": d["reason"],
+            }
+            out.append(every)
             pr = d.get("production")
-            if pr is not None:
+            if pr is not None:  # the same limit, the production model's value and error
                 out.append(
-                    {
-                        "condition": cond,
-                        "quantity": q,
-                        "limit of": "all knobs (production model)",
-                        "base": pr["value"],
-                        "limit": d["limit"],
-                        "uncertainty": d["uncertainty"],
-                        "error vs limit %": pr["signed_error_pct"],
-                        "uncertainty %": d["uncertainty_pct"],
-                        "trusted": d["trusted"],
-                        "bounded by": ", ".join(d["bounded"]),
-                        "error vs reference %": None,
-                        "why not trusted": d["reason"],
-                    }
+                    dict(
+                        every,
+                        **{
+                            "limit of": "all knobs (production model)",
+                            "base": pr["value"],
+                            "error vs limit %": pr["signed_error_pct"],
+                            "error vs reference %": None,
+                        },
+                    )
                 )
             for knob, k in d["knobs"].items():
                 out.append(
