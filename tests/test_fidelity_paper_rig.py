@@ -304,3 +304,17 @@ def test_the_production_model_is_judged_against_the_same_limit():
     assert [r["error vs limit %"] for r in with_p if "production" in r["limit of"]][2] == (
         pytest.approx(-1.25, rel=1e-6)
     )
+
+
+def test_a_bad_production_geometry_is_refused_before_any_case(tmp_path):
+    """A production geometry file with a value out of range stops the study at once, naming
+    the parameter, before a single case of the ladders is computed."""
+    from workbench.studies.kinds.fidelity.compute import run_fidelity
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[rig.mesh]\npad_mm = -1.0\n")
+    spec = load_study(PADS, {"production-geometry": str(bad)})
+    with pytest.raises(InputError) as e:
+        run_fidelity(spec, tmp_path / "out")
+    assert e.value.param == "rig.mesh.pad_mm" and "\n" not in str(e.value)
+    assert not list((tmp_path / "out").rglob("*.h5"))  # nothing was computed

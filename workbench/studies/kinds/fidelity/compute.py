@@ -283,6 +283,11 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
     if not spec.fidelity.knobs:
         raise InputError("knobs", spec.fidelity.knobs, "at least one knob to vary")
     comp = _Computer(spec, out, force)
+    if spec.fidelity.production_geometry:  # its bad values refused now, not after the ladders
+        from ....geometry import load_geometry_params
+
+        for d in comp.dampers:
+            load_geometry_params(d, spec.fidelity.production_geometry)
     if getattr(spec, "nonlinear_modes", False) and len(comp.dampers) > 1:
         raise InputError(
             "nonlinear-modes", True, "false in a fidelity study of several dampers (one damper)"
