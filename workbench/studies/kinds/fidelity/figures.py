@@ -487,7 +487,11 @@ def plot_base_per_knob(table: dict[str, dict[str, dict[str, Any]]], path: str | 
         if ys:
             ax.set_ylim(min(ys) / 10.0, max(ys) * 3.0)
         ax.set_xticks(range(len(conds)))
-        ax.set_xticklabels([c.replace(" deg ", "°\n") for c in conds], fontsize=7)
+        if len(conds) <= 6:  # two lines each fit side by side
+            ax.set_xticklabels([c.replace(" deg ", "°\n") for c in conds], fontsize=7)
+        else:  # more: upright, one line each, so neighbours do not overlap
+            ax.set_xticklabels([c.replace(" deg ", "° ") for c in conds], fontsize=6.5,
+                               rotation=90)  # fmt: skip
         ax.set_xlim(-0.5, len(conds) - 0.5)
         for i in range(1, len(conds)):
             ax.axvline(i - 0.5, color="0.85", lw=0.8)
