@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from workbench.post.extrapolation import observed_order, richardson
+from workbench.post.extrapolation import data_range, least_squares, observed_order, richardson
 
 
 @pytest.mark.parametrize("p", [1.0, 2.0, 3.5])
@@ -284,6 +284,9 @@ def test_scattered_ladders_of_four_levels_are_fitted_by_least_squares():
         if not est.trusted:  # the scatter makes the levels look as if they did not converge
             assert est.method == "finest level" and est.uncertainty is None
             continue
+        if est.method == "bounded":  # an oscillation whose differences shrink: data range
+            assert abs(est.value - 380.0) <= est.uncertainty, (signs, est)
+            continue
         assert est.method == "least squares" and est.n_levels == 4
         assert abs(est.value - 380.0) <= est.uncertainty, (signs, est)
         fitted += 1
@@ -316,3 +319,50 @@ def test_the_peak_point_is_the_summarys_peak():
         assert r._peak_point() == {k: s[k] for k in _PEAK_KEYS}
         n_none += s["peak_amplitude_mm"] is None
     assert n_none >= 1  # the failed case
+
+
+def test_an_oscillatory_convergence_of_four_levels_is_bounded_by_its_data_range():
+    """q = 1 + 0.01 h (-1)^k on h = 1, 2, 4, 8 (finest first): the differences change sign
+    at every level and halve towards the finest, no power law fits and the least squares
+    cannot read it; the limit 1 lies inside three times the data range around the finest
+    level (Eca and Hoekstra's bound for an oscillatory convergence). The same oscillation
+    growing towards the finest level is bounded by nothing."""
+    h = [1.0, 2.0, 4.0, 8.0]
+    q = [1.0 + 0.01 * x * (-1) ** k for k, x in enumerate(h)]  # 1.01, 0.98, 1.04, 0.92
+    rng = data_range(h, q)
+    assert rng.method == "bounded" and rng.trusted and not rng.corrects
+    assert rng.value == q[0] and rng.n_levels == 4 and "data range" in rng.reason
+    assert rng.uncertainty == pytest.approx(3.0 * (1.04 - 0.92), rel=1e-12)
+    assert abs(rng.value - 1.0) <= rng.uncertainty
+    assert data_range(h[::-1], q[::-1]) == rng  # any order of the levels
+    # the ladder's estimate: the narrower of this bound and the least-squares fit
+    est, fit = richardson(h, q), least_squares(h, q)
+    assert est.trusted and est.uncertainty == min(rng.uncertainty, fit.uncertainty)
+    assert abs(est.value - 1.0) <= est.uncertainty
+    grow = [1.0 + 0.01 / x * (-1) ** k for k, x in enumerate(h)]  # largest step at the finest
+    bad = richardson(h, grow)
+    assert not bad.trusted and bad.method == "finest level"
+    assert "does not shrink towards the finest" in bad.reason
+    assert data_range(h, grow) is None
+    # monotone ladders never get this bound, converging or not
+    assert data_range(h, [2.0 + x for x in h]) is None
+    assert data_range([0.75, 1.0, 1.5, 3.0], [29.03, 25.88, 24.30, 22.29]) is None
+    assert data_range(h[:3], q[:3]) is None  # three levels: the three-level rules stand
+
+
+def test_a_fit_wider_than_the_data_range_gives_way_to_it():
+    """Five levels that oscillate about 24.2 with steps shrinking towards the finest (0.06,
+    0.11, 0.18, 0.33): the least-squares fit triples its band for the scatter (1.09), three
+    times the data range (0.99) is narrower and is the one kept; the limit 24.2 lies inside
+    both. Five levels of the pad rig's energy against points per line (24.10, 24.27, 24.24,
+    24.23, 24.16 mJ, finest first) take their largest step at the finest level: an
+    oscillation that grows, which keeps its fit."""
+    h = [1 / 45, 1 / 33, 1 / 23, 1 / 17, 1 / 11]  # finest first
+    q = [24.2, 24.26, 24.15, 24.33, 24.0]
+    fit, est = least_squares(h, q), richardson(h, q)
+    assert est.method == "bounded" and est.n_levels == 5 and "data range" in est.reason
+    assert est.uncertainty == pytest.approx(3.0 * 0.33, rel=1e-9)
+    assert est.uncertainty < fit.uncertainty
+    assert abs(est.value - 24.2) <= est.uncertainty and abs(fit.value - 24.2) <= fit.uncertainty
+    pads = [24.10, 24.27, 24.24, 24.23, 24.16]
+    assert data_range(h, pads) is None and richardson(h, pads).method == "least squares"

@@ -67,6 +67,18 @@ mean step (``method = "least squares"``, trusted, not ``asymptotic``).
 Levels whose best order is the range's lowest (slow convergence or none,
 as a point load's log(1/h)) are not fitted.
 
+A ladder of four or more levels whose differences change sign somewhere
+(an oscillation) and shrink as the levels get finer (the order ``p*`` of a
+power law fitted to their magnitudes, ``|q_i+1 - q_i| ~ h^p*``, positive) is
+an oscillatory convergence: its limit is bounded by three times the data
+range ``Delta_M`` (the largest difference between any two levels) around
+the finest level (:func:`data_range`; ``method = "bounded"``, trusted). That
+is the rule of Eca and Hoekstra's least-squares version of Roache's grid
+convergence index for oscillatory convergence, which also takes the smaller
+of that bound and a fit's uncertainty: the fit is kept where its
+uncertainty is the smaller. Differences that grow (``p* <= 0``, an
+oscillatory divergence) are bounded by nothing.
+
 No library of this package is imported here (plain numpy).
 """
 
@@ -74,7 +86,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
@@ -106,8 +118,8 @@ class LimitEstimate:
 
     @property
     def trusted(self) -> bool:
-        """Extrapolated (``asymptotic``), fitted over four or more levels, or bounded by
-        the finest levels' spread."""
+        """Extrapolated (``asymptotic``), fitted over four or more levels, or bounded (by
+        the finest levels' spread, their resolution or an oscillation's data range)."""
         return self.asymptotic or self.method in ("bounded", "least squares")
 
     @property
@@ -226,6 +238,39 @@ def least_squares(
     return LimitEstimate(float(q0), float(unc), p, False, "least squares", why, float(qq[0]), n)
 
 
+def data_range(
+    h: Sequence[float], q: Sequence[float], *, factor: float = 3.0
+) -> LimitEstimate | None:
+    """An oscillatory convergence bounded by ``factor`` times its data range (module doc).
+
+    ``h``, ``q``: four or more levels (any order, distinct fineness). None unless the
+    differences between consecutive levels change sign somewhere and their magnitudes
+    shrink towards the finest level: a least-squares line through ``log |dq|`` against
+    ``log h`` (h of each pair's geometric mean; zero differences left out, two or more
+    needed) has a positive slope ``p*``. The value is the finest level's; no correction.
+    """
+    pairs = sorted(zip((float(x) for x in h), (float(y) for y in q), strict=True))
+    if len(pairs) < 4:
+        return None
+    hh = np.array([a for a, _ in pairs])
+    qq = np.array([b for _, b in pairs])
+    d = np.diff(qq)
+    nz = d != 0.0
+    if not np.any(np.sign(d[nz][1:]) != np.sign(d[nz][:-1])) or np.count_nonzero(nz) < 2:
+        return None  # monotone: a fit or nothing, never this bound
+    hm = np.sqrt(hh[1:] * hh[:-1])[nz]
+    p_star = float(np.polyfit(np.log(hm), np.log(np.abs(d[nz])), 1)[0])
+    if not p_star > 0.0:
+        return None  # the oscillation grows as the levels get finer: nothing bounds it
+    span = float(qq.max() - qq.min())
+    why = (
+        f"oscillating over {len(qq)} levels with differences that shrink (order of the "
+        f"differences {p_star:.3g}); bounded by {factor:g} times the data range {span:.3g}"
+    )
+    return LimitEstimate(float(qq[0]), factor * span, None, False, "bounded", why, float(qq[0]),
+                         len(qq))  # fmt: skip
+
+
 def richardson(
     h: Sequence[float],
     q: Sequence[float | None],
@@ -266,11 +311,20 @@ def richardson(
 
     def unread(reason: str, order: float | None = None) -> LimitEstimate:
         """The finest three levels cannot be read: all of them fitted, if four or more."""
-        fit = least_squares(
-            [a for a, _ in pairs], [b for _, b in pairs], p_range=p_range, safety=safety,
-            reason=reason,
-        )  # fmt: skip
-        return fit if fit is not None else fallback(reason, order)
+        hs_, qs_ = [a for a, _ in pairs], [b for _, b in pairs]
+        fit = least_squares(hs_, qs_, p_range=p_range, safety=safety, reason=reason)
+        rng = data_range(hs_, qs_)
+        if rng is not None and (fit is None or rng.uncertainty < fit.uncertainty):
+            return replace(rng, reason=f"{reason}; {rng.reason}")
+        if fit is not None:
+            return fit
+        if n >= 4:  # say why the levels beyond the finest three did not help either
+            d = np.diff(qs_)
+            turns = np.any(np.sign(d[d != 0][1:]) != np.sign(d[d != 0][:-1]))
+            reason += f"; over all {n} levels no converging order fits" + (
+                " and the oscillation does not shrink towards the finest" if turns else ""
+            )
+        return fallback(reason, order)
 
     if n < 3:
         return fallback(f"{n} level(s) with a value: three are needed for an observed order")
@@ -324,4 +378,12 @@ def richardson(
     return LimitEstimate(q0, unc, float(p), True, "richardson", "", finest, 3)
 
 
-__all__ = ["P_RANGE", "SAFETY", "LimitEstimate", "least_squares", "observed_order", "richardson"]
+__all__ = [
+    "P_RANGE",
+    "SAFETY",
+    "LimitEstimate",
+    "data_range",
+    "least_squares",
+    "observed_order",
+    "richardson",
+]
