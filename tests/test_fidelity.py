@@ -509,3 +509,27 @@ def test_fidelity_nonlinear_mode_entry(tmp_path):
         assert err < 2.0
     else:
         assert "not valid" in nlm["knobs"]
+
+
+def test_a_stuck_dampers_round_off_energy_is_zero_not_a_1000_percent_error():
+    """A damper stuck at the peak dissipates nothing; its loop integral comes out as
+    round-off (6.3e-18 mJ on the pad rig's stuck cylinder) and must not be read as a
+    relative error of hundreds of percent against another round-off value, or against
+    a limit: both are 0, the error 0 %; against a true 0 no relative error exists. A real
+    dissipation (1e-9 mJ and up) is kept."""
+    from workbench.post.fidelity import ROUND_OFF_ZERO, _relative, zeroed
+
+    q = "friction_energy_mj"
+    assert zeroed(q, 6.301e-18) == 0.0 and zeroed(q, -3e-17) == 0.0
+    assert zeroed(q, 1e-9) == 1e-9 and zeroed(q, None) is None
+    assert zeroed("peak_frequency_hz", 1e-15) == 1e-15  # only the energy has a zero floor
+    out: dict = {}
+    _relative(6.301e-18, 2.6e-18, out, q)
+    assert out == {q: 0.0}  # 0 against 0, not 142 %
+    out = {}
+    _relative(0.5, 4e-17, out, q)
+    assert out == {}  # nothing is relative to nothing
+    out = {}
+    _relative(2e-9, 1e-9, out, q)
+    assert out[q] == pytest.approx(100.0)  # small but real: measured
+    assert ROUND_OFF_ZERO[q] < 1e-9

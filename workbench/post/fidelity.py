@@ -28,7 +28,19 @@ QUANTITIES = (
 )
 
 
+# values at or below these are zero (quantity -> floor, its units): a damper stuck at the
+# peak dissipates nothing, and its loop integral comes out as round-off (1e-18..1e-16 mJ on
+# the rigs here), whose relative differences would read as errors of 100-1000 %
+ROUND_OFF_ZERO = {"friction_energy_mj": 1e-12}
+
 STAGES = ("geometry", "reduction", "assembly", "hbm")
+
+
+def zeroed(q: str, v: float | None) -> float | None:
+    """``v`` with a round-off value of a quantity that is physically zero set to 0."""
+    if v is None or abs(v) > ROUND_OFF_ZERO.get(q, 0.0):
+        return v
+    return 0.0
 
 
 def harmonics_label(hs: list[int]) -> str:
@@ -122,7 +134,8 @@ def worst(errors: dict[str, dict[str, float | None]], q: str | None = None) -> f
 def _relative(a: float | None, b: float | None, out: dict[str, float | None], q: str) -> None:
     """``out[q]`` = |a - b| / |b| in percent; None if a value is missing; left out (no key)
     where b is 0: a damper stuck at the peak dissipates nothing, and no error is relative
-    to nothing (0 % if ``a`` is 0 too)."""
+    to nothing (0 % if ``a`` is 0 too). Round-off zeros count as 0 (``ROUND_OFF_ZERO``)."""
+    a, b = zeroed(q, a), zeroed(q, b)
     if a is None or b is None:
         out[q] = None
     elif b != 0:
@@ -197,7 +210,7 @@ def setting_value(st: Setting, cond: str, q: str) -> float | None:
     if r is None or r.branch.failed:
         return None
     v = r.refined_peak().get(q)
-    return None if v is None or not math.isfinite(v) else float(v)
+    return None if v is None or not math.isfinite(v) else zeroed(q, float(v))
 
 
 def setting_resolution(st: Setting, cond: str, q: str) -> float | None:
@@ -362,10 +375,13 @@ def pick_basis(combined: dict[str, dict[str, dict[str, Any]]]) -> str:
 
 
 def limit_uncertainty_pct(combined: dict[str, dict[str, dict[str, Any]]], q: str) -> float | None:
-    """The largest uncertainty of the limit of ``q`` over the conditions, percent of |limit|."""
+    """The largest uncertainty of the limit of ``q`` over the conditions, percent of |limit|
+    (None if one is unknown); a limit of 0 (a stuck damper's energy) has none and is left out."""
     us = []
     for c in combined.values():
         d = c.get(q, {})
+        if d.get("value") == 0.0:
+            continue
         if d.get("uncertainty") is None or not d.get("value"):
             return None
         us.append(abs(d["uncertainty"]) / abs(d["value"]) * 100.0)

@@ -447,7 +447,8 @@ def plot_base_per_knob(table: dict[str, dict[str, dict[str, Any]]], path: str | 
     ``table``: condition -> quantity -> the row of
     ``report_base.base_vs_limit`` (``knobs``: knob -> ``error_vs_limit_pct``,
     ``uncertainty_pct``). A knob whose limit is not trusted for a case gets a
-    grey cross on the bottom edge and no number.
+    grey cross on the bottom edge and no number; a case whose base value is 0 (a damper
+    stuck at the peak dissipates nothing) says so instead.
     """
     from matplotlib.transforms import blended_transform_factory
 
@@ -460,11 +461,16 @@ def plot_base_per_knob(table: dict[str, dict[str, dict[str, Any]]], path: str | 
     for ax, q in zip(axes, qs, strict=True):
         tr = blended_transform_factory(ax.transData, ax.transAxes)
         ys = []
+        stuck = {c for c in conds if table[c][q].get("base") == 0.0}
+        for i, c in enumerate(conds):
+            if c in stuck:  # a stuck damper's energy: 0, and no error is relative to 0
+                ax.text(i, 0.04, "0 (stuck)", transform=tr, rotation=90, ha="center",
+                        va="bottom", fontsize=7, color="0.4")  # fmt: skip
         for j, knob in enumerate(knobs):
             for i, c in enumerate(conds):
                 d = table[c][q]["knobs"].get(knob)
-                if d is None:
-                    continue  # the knob does not reach this damper
+                if d is None or c in stuck:
+                    continue  # the knob does not reach this damper, or nothing to measure
                 x = i - 0.4 + width * (j + 0.5)
                 e, u = d["error_vs_limit_pct"], d["uncertainty_pct"] or 0.0
                 if e is None:

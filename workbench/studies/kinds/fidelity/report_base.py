@@ -108,7 +108,8 @@ def _production_row(
     """The production model's value at ``cond``, its error against ``limit`` (None: not
     trusted) and its difference from the base setting on this study's model."""
     p = setting_value(production, cond, q)
-    signed = None if p is None or limit is None else (p - limit) / abs(limit) * 100.0
+    # a limit of 0 (a stuck damper's energy): nothing is relative to it
+    signed = None if p is None or not limit else (p - limit) / abs(limit) * 100.0
     return {
         "value": p,
         "error_vs_limit_pct": None if signed is None else abs(signed),
