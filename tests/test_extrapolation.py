@@ -366,3 +366,36 @@ def test_a_fit_wider_than_the_data_range_gives_way_to_it():
     assert abs(est.value - 24.2) <= est.uncertainty and abs(fit.value - 24.2) <= fit.uncertainty
     pads = [24.10, 24.27, 24.24, 24.23, 24.16]
     assert data_range(h, pads) is None and richardson(h, pads).method == "least squares"
+
+
+def test_a_remeshing_knob_is_bounded_by_the_mesh_ladders_scatter():
+    """A stuck cylinder's frequency on the pad rig: the contact-size ladder moves by 0.04 Hz
+    without a trend (309.095, 309.091, 309.088, 309.128 Hz at 3 / 1.5 / 1 / 0.75 mm), which
+    no rule reads. Each contact size meshes the model anew, and the global mesh ladder
+    measures what that alone moves: its scatter about its h^1 trend (here 0.2 Hz). Within
+    that, the contact ladder is bounded by it (x 1.25); a knob that does not re-mesh (nt)
+    gets no such floor, and without a mesh ladder of four levels nothing changes."""
+    from workbench.post.extrapolation import fit_scatter
+    from workbench.post.fidelity import QUANTITIES, ladder_limits, remeshing_scatter
+
+    q = QUANTITIES[1][0]
+    sizes = [14.0, 11.0, 9.0, 8.0, 7.0, 6.0]
+    wobble = [0.2, -0.2, 0.2, -0.2, 0.2, -0.2]
+    mesh = [_fake_setting({"mesh-size": h}, 305.0 + 0.5 * h + w)
+            for h, w in zip(sizes, wobble, strict=True)]  # fmt: skip
+    sc = fit_scatter(sizes, [305.0 + 0.5 * h + w for h, w in zip(sizes, wobble, strict=True)])
+    assert 0.15 < sc < 0.3
+    contact = [309.095, 309.091, 309.088, 309.128]
+    lad_c = [_fake_setting({"contact-mesh-size": h}, v)
+             for h, v in zip([3.0, 1.5, 1.0, 0.75], contact, strict=True)]  # fmt: skip
+    lad_n = [_fake_setting({"nt": n}, v) for n, v in zip([16, 32, 64, 128], contact, strict=True)]
+    alone = ladder_limits({"contact-mesh-size": lad_c})["contact-mesh-size"]["c"][q]
+    assert not alone.trusted  # the growing oscillation alone: bounded by nothing
+    lim = ladder_limits({"mesh-size": mesh, "contact-mesh-size": lad_c, "nt": lad_n})
+    assert remeshing_scatter({"mesh-size": mesh})[("c", q)] == pytest.approx(sc, rel=1e-12)
+    est = lim["contact-mesh-size"]["c"][q]
+    assert est.trusted and est.method == "bounded" and est.value == 309.128
+    assert est.uncertainty == pytest.approx(1.25 * sc, rel=1e-12)
+    assert "re-meshing scatter" in est.reason
+    assert not lim["nt"]["c"][q].trusted  # nt does not re-mesh: no floor
+    assert remeshing_scatter({"mesh-size": mesh[:3]}) == {}  # three levels: no scatter

@@ -36,7 +36,11 @@ own resolution (``noise``: what the measurement itself cannot tell apart,
 e.g. a peak picked among computed points a step apart) has converged as far
 as it can be seen: ``method = "bounded"``, the finest level +- ``SAFETY``
 times the larger of the spread and the resolution, whatever the signs of
-its differences.
+its differences. On an unstructured mesh the model itself has such a
+resolution: re-meshing at a slightly different setting moves every value
+by a scatter that no refinement removes, which the scatter of the global
+mesh ladder about its least-squares trend measures (:func:`fit_scatter`;
+``workbench/post/fidelity.py`` gives it to the knobs that re-mesh).
 
 With three levels, two of the other cases still bound the limit (``method = "bounded"``, value
 the finest level's, ``trusted`` True though ``asymptotic`` is False):
@@ -238,6 +242,19 @@ def least_squares(
     return LimitEstimate(float(q0), float(unc), p, False, "least squares", why, float(qq[0]), n)
 
 
+def fit_scatter(h: Sequence[float], q: Sequence[float]) -> float | None:
+    """The scatter of four or more levels about their trend: the standard deviation of
+    the better least-squares fit ``q0 + c h^p`` at p = 1 or 2 (units of ``q``); None with
+    fewer levels."""
+    pairs = sorted(zip((float(x) for x in h), (float(y) for y in q), strict=True))
+    if len(pairs) < 4:
+        return None
+    hh = np.array([a for a, _ in pairs])
+    qq = np.array([b for _, b in pairs])
+    rss = min(_fit(hh / hh[0], qq, p)[2] for p in (1.0, 2.0))
+    return math.sqrt(rss / (len(pairs) - 2))
+
+
 def data_range(
     h: Sequence[float], q: Sequence[float], *, factor: float = 3.0
 ) -> LimitEstimate | None:
@@ -279,6 +296,7 @@ def richardson(
     safety: float = SAFETY,
     rtol_converged: float = 1e-9,
     noise: float | None = None,
+    noise_what: str = "the quantity's resolution",
 ) -> LimitEstimate:
     """The converged value of ``q`` from its finest three levels, with the observed order.
 
@@ -293,7 +311,8 @@ def richardson(
     difference between the three-level and a two-level extrapolation is
     not used: with the observed order the two coincide by construction.
     ``noise``: the quantity's resolution in its units (None or 0: none known); a ladder
-    whose finest three levels lie within it is bounded by it (module doc).
+    whose finest three levels lie within it is bounded by it (module doc); ``noise_what``
+    names it in the reason.
     """
     pairs = sorted(
         (float(hh), float(qq))
@@ -345,8 +364,8 @@ def richardson(
 
     if noise and spread <= noise:
         why = (
-            f"the finest three levels differ by {spread:.3g}, within the quantity's "
-            f"resolution {noise:.3g}; bounded by that resolution (x {safety:g})"
+            f"the finest three levels differ by {spread:.3g}, within {noise_what} "
+            f"{noise:.3g}; bounded by it (x {safety:g})"
         )
         return LimitEstimate(finest, safety * noise, None, False, "bounded", why, finest, 3)
 
@@ -383,6 +402,7 @@ __all__ = [
     "SAFETY",
     "LimitEstimate",
     "data_range",
+    "fit_scatter",
     "least_squares",
     "observed_order",
     "richardson",

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..io import digest
-from .extrapolation import LimitEstimate, richardson
+from .extrapolation import LimitEstimate, fit_scatter, richardson
 from .knobs import KNOBS
 from .results import CaseResult
 
@@ -175,6 +175,9 @@ def ladder_self_errors(ladders: dict[str, list[Setting]]) -> dict[str, list[floa
     }
 
 
+# knobs whose every level meshes the model anew (the contact points are mesh nodes): their
+# ladders cannot resolve differences below the re-meshing scatter the mesh ladder measures
+REMESHING_KNOBS = ("contact-mesh-size", "points-per-line")
 NO_LADDER = "no fineness to extrapolate"  # the reason given for a modelling choice (rigid damper)
 # the reason given where a knob does not reach a condition's model (points per line: the wedge)
 NOT_APPLICABLE = "the knob does not reach this damper's model"
@@ -231,8 +234,9 @@ def ladder_limits(
     Each knob's ladder (the other knobs at the base) is extrapolated with the
     observed order (``workbench.post.extrapolation.richardson``), given the
     quantity's resolution on the finest three levels' curves
-    (:func:`setting_resolution`, the largest): differences within it bound
-    the limit instead. A knob with
+    (:func:`setting_resolution`, the largest; for a knob that re-meshes, the
+    re-meshing scatter of :func:`remeshing_scatter` where that is larger):
+    differences within it bound the limit instead. A knob with
     no fineness (rigid damper) or two levels only falls back to its finest
     level, flagged not asymptotic. ``skip``: the (knob, condition) pairs where
     the knob does not reach the condition's model (points per line on the
@@ -240,6 +244,7 @@ def ladder_limits(
     :func:`combined_limits` leaves out (no correction, no flag).
     """
     out: dict[str, dict[str, dict[str, Any]]] = {}
+    remesh = remeshing_scatter(ladders)
     for knob, lad in ladders.items():
         ladder = is_ladder(knob, lad)
         hs = [knob_h(knob, st.values[knob]) for st in lad]
@@ -265,11 +270,39 @@ def ladder_limits(
                         (h, r) for h, r, v in zip(hs, res, vals, strict=True) if v is not None
                     )[:3]
                     known = [r for _, r in finest3 if r is not None]
-                    est = richardson(hs, vals, noise=max(known) if known else None)
+                    noise = max(known) if known else None
+                    what = "the quantity's resolution"
+                    sc = remesh.get((cond, q)) if knob in REMESHING_KNOBS else None
+                    if sc is not None and (noise is None or sc > noise):
+                        noise, what = sc, "the re-meshing scatter (the global mesh ladder's)"
+                    est = richardson(hs, vals, noise=noise, noise_what=what)
                 else:
                     v = vals[-1]
                     est = LimitEstimate(v, None, None, False, "finest level", NO_LADDER, v, 1)
                 out[knob][cond][q] = est
+    return out
+
+
+def remeshing_scatter(ladders: dict[str, list[Setting]]) -> dict[tuple[str, str], float]:
+    """(condition, quantity) -> the scatter of the global mesh ladder about its trend
+    (:func:`~workbench.post.extrapolation.fit_scatter`; four or more levels with a value).
+
+    An unstructured mesh places its nodes anew at every setting, so a value moves by
+    about this much whenever the model is meshed again, whatever is refined: a knob that
+    re-meshes (``REMESHING_KNOBS``) cannot resolve less, and :func:`ladder_limits` gives
+    it as that knob's noise floor. Empty without a mesh-size ladder of four levels."""
+    lad = ladders.get("mesh-size")
+    if not lad or not is_ladder("mesh-size", lad):
+        return {}
+    out: dict[tuple[str, str], float] = {}
+    for cond in lad[-1].results:
+        for q, _, _ in QUANTITIES:
+            pts = [(knob_h("mesh-size", st.values["mesh-size"]), setting_value(st, cond, q))
+                   for st in lad]  # fmt: skip
+            pts = [(h, v) for h, v in pts if v is not None]
+            sc = fit_scatter([h for h, _ in pts], [v for _, v in pts])
+            if sc is not None:
+                out[(cond, q)] = sc
     return out
 
 
