@@ -73,7 +73,8 @@ as a point load's log(1/h)) are not fitted.
 
 A ladder of four or more levels whose differences change sign somewhere
 (an oscillation) and shrink as the levels get finer (the order ``p*`` of a
-power law fitted to their magnitudes, ``|q_i+1 - q_i| ~ h^p*``, positive) is
+power law fitted to their magnitudes, ``|q_i+1 - q_i| ~ h^p*``, positive, and
+the finest step no larger than the one before it) is
 an oscillatory convergence: its limit is bounded by three times the data
 range ``Delta_M`` (the largest difference between any two levels) around
 the finest level (:func:`data_range`; ``method = "bounded"``, trusted). That
@@ -264,7 +265,9 @@ def data_range(
     differences between consecutive levels change sign somewhere and their magnitudes
     shrink towards the finest level: a least-squares line through ``log |dq|`` against
     ``log h`` (h of each pair's geometric mean; zero differences left out, two or more
-    needed) has a positive slope ``p*``. The value is the finest level's; no correction.
+    needed) has a positive slope ``p*``, and the finest step is no larger than the one
+    before it (the three-level rule's test of a growing oscillation). The value is the
+    finest level's; no correction.
     """
     pairs = sorted(zip((float(x) for x in h), (float(y) for y in q), strict=True))
     if len(pairs) < 4:
@@ -279,6 +282,8 @@ def data_range(
     p_star = float(np.polyfit(np.log(hm), np.log(np.abs(d[nz])), 1)[0])
     if not p_star > 0.0:
         return None  # the oscillation grows as the levels get finer: nothing bounds it
+    if abs(d[0]) > abs(d[1]):
+        return None  # ... or its finest step is its largest yet (as three levels judge it)
     span = float(qq.max() - qq.min())
     why = (
         f"oscillating over {len(qq)} levels with differences that shrink (order of the "
