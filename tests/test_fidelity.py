@@ -13,6 +13,7 @@ import pytest
 
 from tests.conftest import ROOT, assert_nonblank, run_upd
 from workbench.errors import InputError
+from workbench.hbm.core.fourier import default_nt
 from workbench.post.fidelity import Setting
 from workbench.post.pareto import pareto_front, pick_cheapest
 from workbench.studies.engine.spec import resolve
@@ -212,7 +213,15 @@ def test_the_study_file_resolves():
     base = settings[0].values
     for knob, lad in ladders.items():
         for st in lad:
-            assert {k for k in base if st.values[k] != base[k]} <= {knob}
+            # harmonics beyond the base's come with the solver's default sampling for them
+            extra = (
+                {"nt"} if knob == "harmonics" and max(st.values[knob]) > max(base[knob]) else set()
+            )
+            assert {k for k in base if st.values[k] != base[k]} <= {knob} | extra
+            if extra:
+                assert st.values["nt"] == max(base["nt"], default_nt(tuple(st.values[knob])))
+                if st.values["nt"] != base["nt"]:  # the chart's label says so
+                    assert st.label.endswith(f", nt {st.values['nt']}"), st.label
 
 
 # ---- a tiny end-to-end study ----------------------------------------------------------------

@@ -90,6 +90,7 @@ from .ladders import (
     knob_applies,
     plan_settings,
     propose_combination,
+    sampled,
 )
 from .options import damper_phases
 
@@ -417,7 +418,7 @@ def _tolerance(
             )
             break
         vals, why = prop
-        full = dict(settings[0].values, **vals)
+        full = sampled(settings[0].values, dict(settings[0].values, **vals))
         key = digest(full, 16)
         if key == ref.key:
             combos.append(

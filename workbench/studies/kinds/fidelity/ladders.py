@@ -115,19 +115,37 @@ def plan_settings(
     for knob, lv in levels.items():
         ladders[knob] = []
         for v in lv:
-            vals = dict(base_v, **{knob: v})
-            st = add(vals, level_label(knob, v), "knob")
-            st.members.append((knob, level_label(knob, v)))
+            vals = sampled(base_v, dict(base_v, **{knob: v}))
+            label = level_label(knob, v)
+            if vals["nt"] != base_v["nt"] and knob == "harmonics":
+                label += f", nt {vals['nt']}"
+            st = add(vals, label, "knob")
+            st.members.append((knob, label))
             ladders[knob].append(st)
     ref_v = dict(base_v)
     for knob, lv in levels.items():
         ref_v[knob] = max(lv + [base_v[knob]], key=lambda x, k=knob: fineness(k, x))
-    ref = add(ref_v, "reference", "reference")
+    ref = add(sampled(base_v, ref_v), "reference", "reference")
     ref.role, ref.label = "reference", "reference"  # may coincide with a knob's finest level
     ref.members.append(("reference", "reference"))
     for st in unique.values():
         _check_sampling(st.values)
     return list(unique.values()), ladders
+
+
+def sampled(base_v: dict[str, Any], values: dict[str, Any]) -> dict[str, Any]:
+    """``values`` with nt raised, where its harmonics go beyond the base's, to the solver's
+    default for them (``default_nt``: 16 samples per period of the highest harmonic or
+    more), never lowered: a user who asks for more harmonics gets that sampling too, and
+    a harmonics ladder at a fixed nt would let aliasing into its finest levels (harmonics
+    0-7 at nt 64: 9 samples per period of the 7th). The nt knob measures the sampling at
+    the base's harmonics."""
+    from ....hbm.core.fourier import default_nt
+
+    h, hb = values["harmonics"], base_v["harmonics"]
+    if max(h) <= max(hb):
+        return values
+    return dict(values, nt=max(int(values["nt"]), default_nt(tuple(h))))
 
 
 def _check_sampling(v: dict[str, Any]) -> None:
@@ -151,7 +169,7 @@ def propose_combination(
     ``errors``: knob -> the error of each level (percent, coarsest first);
     default: each one-knob setting's error against the reference. Returns
     (knob -> value, knob -> why) or None when a knob has no level meeting
-    the tolerance.
+    the tolerance. The caller samples the combination as :func:`sampled` says.
     """
     values: dict[str, Any] = {}
     why: dict[str, str] = {}
