@@ -542,3 +542,24 @@ def test_a_stuck_dampers_round_off_energy_is_zero_not_a_1000_percent_error():
     _relative(2e-9, 1e-9, out, q)
     assert out[q] == pytest.approx(100.0)  # small but real: measured
     assert ROUND_OFF_ZERO[q] < 1e-9
+
+
+def test_an_nt_ladder_below_the_references_sampling_is_refused_when_planned():
+    """Harmonics 0-5 beyond a base of 0-3 are sampled at nt 128 (the solver's default), so
+    the reference is too; an nt ladder that stops at 64 could not correct it: the study
+    says so when it is planned, naming levels-nt and the nt it needs."""
+    from workbench.studies.engine.spec import load_study
+    from workbench.studies.kinds.fidelity.ladders import plan_settings
+
+    over = {"knobs": "harmonics,nt", "levels-harmonics": "0-1,0-3,0-5", "levels-nt": "16,32,64",
+            "harmonics": "0,1,2,3", "nt": 64}  # fmt: skip
+    spec = load_study(ROOT / "studies" / "fidelity.toml", over)
+    with pytest.raises(InputError) as e:
+        plan_settings(spec, ["cone"])
+    assert e.value.param == "levels-nt" and "128" in str(e.value)
+    spec = load_study(
+        ROOT / "studies" / "fidelity.toml", dict(over, **{"levels-nt": "16,32,64,128"})
+    )
+    settings, _ = plan_settings(spec, ["cone"])
+    ref = next(s for s in settings if s.role == "reference")
+    assert ref.values["nt"] == 128 and ref.values["harmonics"] == list(range(6))

@@ -125,7 +125,16 @@ def plan_settings(
     ref_v = dict(base_v)
     for knob, lv in levels.items():
         ref_v[knob] = max(lv + [base_v[knob]], key=lambda x, k=knob: fineness(k, x))
-    ref = add(sampled(base_v, ref_v), "reference", "reference")
+    ref_v = sampled(base_v, ref_v)
+    if "nt" in levels and ref_v["nt"] > max(levels["nt"] + [base_v["nt"]]):
+        raise InputError(
+            "levels-nt",
+            levels["nt"],
+            f"a level of nt {ref_v['nt']} or more: the reference's harmonics "
+            f"{ref_v['harmonics']} are sampled at nt {ref_v['nt']}, and an nt ladder "
+            "that stops below it cannot correct the reference",
+        )
+    ref = add(ref_v, "reference", "reference")
     ref.role, ref.label = "reference", "reference"  # may coincide with a knob's finest level
     ref.members.append(("reference", "reference"))
     for st in unique.values():
