@@ -199,9 +199,16 @@ def plot_knob(
         ax.set_xlabel("compute time of the setting, s")
         ax.set_ylabel(f"{QUANTITY_TITLES.get(q, q)} error, %")
         ax.set_title(QUANTITY_TITLES.get(q, q), fontsize=10)
-    axes[0].legend(title="condition", loc="best")
+    if len(conds) <= 4:  # a few: inside the first panel
+        axes[0].legend(title="condition", loc="best")
+        fig.tight_layout()
+    else:  # more would hide the data: one row of columns below the panels
+        ncol = min(len(conds), 6)
+        fig.legend(*axes[0].get_legend_handles_labels(), title="condition", loc="lower center",
+                   ncol=ncol, fontsize=7, frameon=False)  # fmt: skip
+        rows = -(-len(conds) // ncol)
+        fig.tight_layout(rect=(0, 0.06 + 0.045 * rows, 1, 0.95))
     fig.suptitle(f"{knob}: error vs compute time (other knobs at the base setting)", fontsize=11)
-    fig.tight_layout()
     return save_figure(fig, path)
 
 

@@ -109,7 +109,7 @@ def fidelity_outputs(
     for knob, lad in ladders.items():
         fig = plot_knob(
             knob,
-            [level_label(knob, s.values[knob]) for s in lad],
+            [dict(s.members).get(knob, level_label(knob, s.values[knob])) for s in lad],
             [s.time_s for s in lad],
             {
                 q: {c: [s.errors.get(c, {}).get(q) for s in lad] for c in conds}
