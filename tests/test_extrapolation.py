@@ -403,3 +403,47 @@ def test_a_remeshing_knob_is_bounded_by_the_mesh_ladders_scatter():
     assert "re-meshing scatter" in est.reason
     assert not lim["nt"]["c"][q].trusted  # nt does not re-mesh: no floor
     assert remeshing_scatter({"mesh-size": mesh[:3]}) == {}  # three levels: no scatter
+
+
+def test_a_slow_ladder_with_one_coarse_flip_gets_no_data_range_bound():
+    """q = h^0.1 (limit 0, converging far too slowly to read) on its four finest levels,
+    the coarsest level out of line (a sign change at the coarse end only): the finest three
+    do not oscillate, so the oscillatory bound (1.0 +- 0.69, which misses the limit 0)
+    does not apply; the least-squares fit over all five levels, with its band tripled for
+    the scatter, contains the limit."""
+    h = [1.0, 2.0, 4.0, 8.0, 16.0]
+    q = [x**0.1 for x in h[:4]] + [1.0]
+    assert data_range(h, q) is not None  # the bound exists, and would be wrong here
+    est = richardson(h, q)
+    assert est.method == "least squares"
+    assert abs(est.value - 0.0) <= est.uncertainty
+
+
+def test_the_remeshing_scatter_bounds_oscillations_only_and_widens_narrow_bands():
+    """A contact ladder that converges monotonically (q = 300 + 0.2 h^2) with its finest
+    three within the re-meshing scatter is read by Richardson, not bounded by the scatter;
+    its band is then widened to 1.25 times the scatter, never narrower. The same levels
+    with the finest three oscillating are bounded by the scatter."""
+    from workbench.post.fidelity import QUANTITIES, ladder_limits
+
+    q = QUANTITIES[1][0]
+    sizes = [14.0, 11.0, 9.0, 8.0, 7.0, 6.0]
+    wob = [0.1, -0.1, 0.1, -0.1, 0.1, -0.1]
+    mesh = [_fake_setting({"mesh-size": s}, 300.0 + 0.3 * s + w)
+            for s, w in zip(sizes, wob, strict=True)]  # fmt: skip
+    hs = [3.0, 1.5, 1.0, 0.75]
+    mono = [_fake_setting({"contact-mesh-size": x}, 300.0 + 0.02 * x**2) for x in hs]
+    lim = ladder_limits({"mesh-size": mesh, "contact-mesh-size": mono})
+    est, sc = lim["contact-mesh-size"]["c"][q], None
+    from workbench.post.fidelity import remeshing_scatter
+
+    sc = remeshing_scatter({"mesh-size": mesh})[("c", q)]
+    assert est.method == "richardson" and est.order == pytest.approx(2.0, rel=1e-6)
+    assert est.value == pytest.approx(300.0, abs=1e-9)
+    assert est.uncertainty == pytest.approx(1.25 * sc, rel=1e-12)  # widened to the scatter
+    assert "widened to the re-meshing scatter" in est.reason
+    osc = [_fake_setting({"contact-mesh-size": x}, v)
+           for x, v in zip(hs, [300.3, 300.0, 300.05, 300.01], strict=True)]  # fmt: skip
+    est = ladder_limits({"mesh-size": mesh, "contact-mesh-size": osc})["contact-mesh-size"]["c"][q]
+    assert est.method == "bounded" and "re-meshing scatter" in est.reason
+    assert est.uncertainty == pytest.approx(1.25 * sc, rel=1e-12)

@@ -524,8 +524,10 @@ def test_a_stuck_dampers_round_off_energy_is_zero_not_a_1000_percent_error():
     """A damper stuck at the peak dissipates nothing; its loop integral comes out as
     round-off (6.3e-18 mJ on the pad rig's stuck cylinder) and must not be read as a
     relative error of hundreds of percent against another round-off value, or against
-    a limit: both are 0, the error 0 %; against a true 0 no relative error exists. A real
-    dissipation (1e-9 mJ and up) is kept."""
+    a limit: both are 0, the error 0 %. A level that slips where the reference sticks
+    counts by its energy against the largest the study measures (100 % without one), and
+    the other way round as 100 %: never a silent pass. A real dissipation (1e-9 mJ and
+    up) is kept."""
     from workbench.post.fidelity import ROUND_OFF_ZERO, _relative, zeroed
 
     q = "friction_energy_mj"
@@ -537,7 +539,13 @@ def test_a_stuck_dampers_round_off_energy_is_zero_not_a_1000_percent_error():
     assert out == {q: 0.0}  # 0 against 0, not 142 %
     out = {}
     _relative(0.5, 4e-17, out, q)
-    assert out == {}  # nothing is relative to nothing
+    assert out == {q: 100.0}  # one slips, the other sticks: no scale, a full miss
+    out = {}
+    _relative(0.5, 4e-17, out, q, scale=25.0)
+    assert out[q] == pytest.approx(2.0)  # 0.5 mJ against the study's 25 mJ energies
+    out = {}
+    _relative(4e-17, 0.5, out, q)
+    assert out == {q: 100.0}
     out = {}
     _relative(2e-9, 1e-9, out, q)
     assert out[q] == pytest.approx(100.0)  # small but real: measured

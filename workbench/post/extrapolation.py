@@ -39,8 +39,10 @@ times the larger of the spread and the resolution, whatever the signs of
 its differences. On an unstructured mesh the model itself has such a
 resolution: re-meshing at a slightly different setting moves every value
 by a scatter that no refinement removes, which the scatter of the global
-mesh ladder about its least-squares trend measures (:func:`fit_scatter`;
-``workbench/post/fidelity.py`` gives it to the knobs that re-mesh).
+mesh ladder about its best least-squares trend measures (:func:`fit_scatter`).
+Given as ``scatter``, it bounds finest three levels that oscillate within
+it; ``workbench/post/fidelity.py`` gives it to the knobs that re-mesh, and
+widens any narrower band of theirs to it.
 
 With three levels, two of the other cases still bound the limit (``method = "bounded"``, value
 the finest level's, ``trusted`` True though ``asymptotic`` is False):
@@ -71,8 +73,8 @@ mean step (``method = "least squares"``, trusted, not ``asymptotic``).
 Levels whose best order is the range's lowest (slow convergence or none,
 as a point load's log(1/h)) are not fitted.
 
-A ladder of four or more levels whose differences change sign somewhere
-(an oscillation) and shrink as the levels get finer (the order ``p*`` of a
+A ladder of four or more levels whose finest three oscillate, whose
+differences shrink as the levels get finer (the order ``p*`` of a
 power law fitted to their magnitudes, ``|q_i+1 - q_i| ~ h^p*``, positive, and
 the finest step no larger than the one before it) is
 an oscillatory convergence: its limit is bounded by three times the data
@@ -245,15 +247,17 @@ def least_squares(
 
 def fit_scatter(h: Sequence[float], q: Sequence[float]) -> float | None:
     """The scatter of four or more levels about their trend: the standard deviation of
-    the better least-squares fit ``q0 + c h^p`` at p = 1 or 2 (units of ``q``); None with
-    fewer levels."""
+    the best least-squares fit ``q0 + c h^p``, its order scanned over ``P_RANGE`` (units
+    of ``q``; three fitted parameters); None with fewer levels. A clean power law of any
+    order in the range has (nearly) none: only what no trend explains counts."""
     pairs = sorted(zip((float(x) for x in h), (float(y) for y in q), strict=True))
     if len(pairs) < 4:
         return None
     hh = np.array([a for a, _ in pairs])
     qq = np.array([b for _, b in pairs])
-    rss = min(_fit(hh / hh[0], qq, p)[2] for p in (1.0, 2.0))
-    return math.sqrt(rss / (len(pairs) - 2))
+    grid = np.exp(np.linspace(np.log(P_RANGE[0]), np.log(P_RANGE[1]), 400))
+    rss = min(_fit(hh / hh[0], qq, p)[2] for p in grid)
+    return math.sqrt(rss / (len(pairs) - 3))
 
 
 def data_range(
@@ -274,16 +278,19 @@ def data_range(
         return None
     hh = np.array([a for a, _ in pairs])
     qq = np.array([b for _, b in pairs])
+    if len(set(hh.tolist())) != len(hh) or hh[0] <= 0:
+        raise ValueError(f"fineness must be positive and distinct: {list(h)}")
     d = np.diff(qq)
     nz = d != 0.0
-    if not np.any(np.sign(d[nz][1:]) != np.sign(d[nz][:-1])) or np.count_nonzero(nz) < 2:
+    dn = d[nz]
+    if np.count_nonzero(nz) < 2 or not np.any(np.sign(dn[1:]) != np.sign(dn[:-1])):
         return None  # monotone: a fit or nothing, never this bound
     hm = np.sqrt(hh[1:] * hh[:-1])[nz]
     p_star = float(np.polyfit(np.log(hm), np.log(np.abs(d[nz])), 1)[0])
     if not p_star > 0.0:
         return None  # the oscillation grows as the levels get finer: nothing bounds it
-    if abs(d[0]) > abs(d[1]):
-        return None  # ... or its finest step is its largest yet (as three levels judge it)
+    if abs(dn[0]) > abs(dn[1]):
+        return None  # ... or its finest step outgrows the one before (as three levels judge)
     span = float(qq.max() - qq.min())
     why = (
         f"oscillating over {len(qq)} levels with differences that shrink (order of the "
@@ -302,6 +309,7 @@ def richardson(
     rtol_converged: float = 1e-9,
     noise: float | None = None,
     noise_what: str = "the quantity's resolution",
+    scatter: float | None = None,
 ) -> LimitEstimate:
     """The converged value of ``q`` from its finest three levels, with the observed order.
 
@@ -317,7 +325,9 @@ def richardson(
     not used: with the observed order the two coincide by construction.
     ``noise``: the quantity's resolution in its units (None or 0: none known); a ladder
     whose finest three levels lie within it is bounded by it (module doc); ``noise_what``
-    names it in the reason.
+    names it in the reason. ``scatter``: the model's re-meshing scatter (None: none);
+    finest three levels that oscillate within it are bounded by it (x ``safety``), as
+    they are by a resolution; a monotone trend is read as usual.
     """
     pairs = sorted(
         (float(hh), float(qq))
@@ -333,11 +343,12 @@ def richardson(
     def fallback(reason: str, order: float | None = None, unc: float | None = None):
         return LimitEstimate(finest, unc, order, False, "finest level", reason, finest, n)
 
-    def unread(reason: str, order: float | None = None) -> LimitEstimate:
-        """The finest three levels cannot be read: all of them fitted, if four or more."""
+    def unread(reason: str, order: float | None = None, oscillating: bool = False):
+        """The finest three levels cannot be read: all of them fitted, if four or more;
+        an oscillation of the finest three also bounded by its data range."""
         hs_, qs_ = [a for a, _ in pairs], [b for _, b in pairs]
         fit = least_squares(hs_, qs_, p_range=p_range, safety=safety, reason=reason)
-        rng = data_range(hs_, qs_)
+        rng = data_range(hs_, qs_) if oscillating else None
         if rng is not None and (fit is None or rng.uncertainty < fit.uncertainty):
             return replace(rng, reason=f"{reason}; {rng.reason}")
         if fit is not None:
@@ -376,8 +387,14 @@ def richardson(
 
     if e21 == 0 or e32 == 0 or np.sign(e21) != np.sign(e32):
         why = "oscillating: the differences between the finest levels change sign"
+        if scatter and spread <= scatter:
+            why += (
+                f", by {spread:.3g}, within the re-meshing scatter {scatter:.3g}; bounded by "
+                f"it (x {safety:g})"
+            )
+            return LimitEstimate(finest, safety * scatter, None, False, "bounded", why, finest, 3)
         if n >= 4:
-            return unread(why)
+            return unread(why, oscillating=True)
         if abs(e21) <= abs(e32):
             return bounded(why)
         return unread(why + ", and grow as the levels get finer")

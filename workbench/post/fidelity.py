@@ -13,11 +13,11 @@ records: the study (``workbench.studies.kinds.fidelity.compute``) fills it, the 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..io import digest
-from .extrapolation import LimitEstimate, fit_scatter, richardson
+from .extrapolation import SAFETY, LimitEstimate, fit_scatter, richardson
 from .knobs import KNOBS
 from .results import CaseResult
 
@@ -122,8 +122,7 @@ class Setting:
 def worst(errors: dict[str, dict[str, float | None]], q: str | None = None) -> float | None:
     """Largest of ``errors[condition][quantity]`` (percent); None if any is missing (None).
 
-    A quantity absent from a condition's errors has no relative error at all (its
-    reference value is 0: see :func:`relative_errors`) and is left out."""
+    A quantity absent from a condition's errors is left out."""
     qs = [q] if q else [k for k, _, _ in QUANTITIES]
     vals = [errors[c][k] for c in errors for k in qs if k in errors[c]]
     if not errors or not vals or any(v is None or not math.isfinite(v) for v in vals):
@@ -131,10 +130,15 @@ def worst(errors: dict[str, dict[str, float | None]], q: str | None = None) -> f
     return max(vals)
 
 
-def _relative(a: float | None, b: float | None, out: dict[str, float | None], q: str) -> None:
-    """``out[q]`` = |a - b| / |b| in percent; None if a value is missing; left out (no key)
-    where b is 0: a damper stuck at the peak dissipates nothing, and no error is relative
-    to nothing (0 % if ``a`` is 0 too). Round-off zeros count as 0 (``ROUND_OFF_ZERO``)."""
+def _relative(
+    a: float | None, b: float | None, out: dict[str, float | None], q: str, scale: float = 0.0
+) -> None:
+    """``out[q]`` = |a - b| / |b| in percent; None if a value is missing. Where b is 0 (a
+    damper stuck at the peak dissipates nothing) no error is relative to it: 0 % if ``a``
+    is 0 too, else |a| in percent of ``scale`` (the largest |b| of the quantity over the
+    study's conditions: a slip where the reference sticks counts by its size against the
+    energies the study measures), 100 % without a scale. Round-off zeros count as 0
+    (``ROUND_OFF_ZERO``)."""
     a, b = zeroed(q, a), zeroed(q, b)
     if a is None or b is None:
         out[q] = None
@@ -142,6 +146,16 @@ def _relative(a: float | None, b: float | None, out: dict[str, float | None], q:
         out[q] = abs(a - b) / abs(b) * 100.0
     elif a == 0:
         out[q] = 0.0
+    else:
+        out[q] = abs(a) / scale * 100.0 if scale > 0 else 100.0
+
+
+def _scales(values: dict[str, dict[str, float | None]]) -> dict[str, float]:
+    """quantity -> the largest |value| over the conditions (0 if none)."""
+    return {
+        q: max([abs(v[q]) for v in values.values() if v.get(q) is not None] or [0.0])
+        for q, _, _ in QUANTITIES
+    }
 
 
 def condition_name(phase: float, force: float, damper: str | None = None) -> str:
@@ -151,15 +165,16 @@ def condition_name(phase: float, force: float, damper: str | None = None) -> str
 
 def relative_errors(st: Setting, ref: Setting) -> dict[str, dict[str, float | None]]:
     """condition -> quantity -> |q - q_ref| / |q_ref| in percent (None: no value to compare;
-    no key where q_ref is 0, see :func:`_relative`)."""
+    against a q_ref of 0: see :func:`_relative`)."""
     out: dict[str, dict[str, float | None]] = {}
+    peaks = {c: r.refined_peak() for c, r in ref.results.items() if not r.branch.failed}
+    scale = _scales(peaks)
     for cond, r in st.results.items():
-        rr = ref.results.get(cond)
         s = r.refined_peak() if not r.branch.failed else {}
-        sr = rr.refined_peak() if rr is not None and not rr.branch.failed else {}
+        sr = peaks.get(cond, {})
         out[cond] = {}
         for q, _, _ in QUANTITIES:
-            _relative(s.get(q), sr.get(q), out[cond], q)
+            _relative(s.get(q), sr.get(q), out[cond], q, scale[q])
     return out
 
 
@@ -178,6 +193,9 @@ def ladder_self_errors(ladders: dict[str, list[Setting]]) -> dict[str, list[floa
 # knobs whose every level meshes the model anew (the contact points are mesh nodes): their
 # ladders cannot resolve differences below the re-meshing scatter the mesh ladder measures
 REMESHING_KNOBS = ("contact-mesh-size", "points-per-line")
+# ... and the mesh ladder, whose bands are no narrower than its own scatter either (that
+# scatter bounds only the other knobs' oscillations: it cannot vouch for its own ladder)
+REMESHES = ("mesh-size", *REMESHING_KNOBS)
 NO_LADDER = "no fineness to extrapolate"  # the reason given for a modelling choice (rigid damper)
 # the reason given where a knob does not reach a condition's model (points per line: the wedge)
 NOT_APPLICABLE = "the knob does not reach this damper's model"
@@ -234,9 +252,10 @@ def ladder_limits(
     Each knob's ladder (the other knobs at the base) is extrapolated with the
     observed order (``workbench.post.extrapolation.richardson``), given the
     quantity's resolution on the finest three levels' curves
-    (:func:`setting_resolution`, the largest; for a knob that re-meshes, the
-    re-meshing scatter of :func:`remeshing_scatter` where that is larger):
-    differences within it bound the limit instead. A knob with
+    (:func:`setting_resolution`, the largest): differences within it bound the
+    limit instead. A knob that re-meshes (``REMESHES``) also gets the re-meshing
+    scatter of :func:`remeshing_scatter`: finest levels that oscillate within it are
+    bounded by it, and none of its bands is narrower. A knob with
     no fineness (rigid damper) or two levels only falls back to its finest
     level, flagged not asymptotic. ``skip``: the (knob, condition) pairs where
     the knob does not reach the condition's model (points per line on the
@@ -270,12 +289,15 @@ def ladder_limits(
                         (h, r) for h, r, v in zip(hs, res, vals, strict=True) if v is not None
                     )[:3]
                     known = [r for _, r in finest3 if r is not None]
-                    noise = max(known) if known else None
-                    what = "the quantity's resolution"
-                    sc = remesh.get((cond, q)) if knob in REMESHING_KNOBS else None
-                    if sc is not None and (noise is None or sc > noise):
-                        noise, what = sc, "the re-meshing scatter (the global mesh ladder's)"
-                    est = richardson(hs, vals, noise=noise, noise_what=what)
+                    sc = remesh.get((cond, q)) if knob in REMESHES else None
+                    est = richardson(
+                        hs, vals, noise=max(known) if known else None,
+                        scatter=sc if knob in REMESHING_KNOBS else None,  # not its own
+                    )  # fmt: skip
+                    if sc and est.trusted and est.uncertainty < SAFETY * sc:
+                        est = replace(est, uncertainty=SAFETY * sc, reason=(
+                            f"{est.reason}; widened to the re-meshing scatter {sc:.3g} "
+                            f"(x {SAFETY:g})").lstrip("; "))  # fmt: skip
                 else:
                     v = vals[-1]
                     est = LimitEstimate(v, None, None, False, "finest level", NO_LADDER, v, 1)
@@ -373,11 +395,12 @@ def combined_limits(
 def limit_errors(st: Setting, combined: dict[str, dict[str, dict[str, Any]]]) -> dict:
     """condition -> quantity -> |q - q_lim| / |q_lim| in percent (None: nothing to compare)."""
     out: dict[str, dict[str, float | None]] = {}
+    scale = _scales({c: {q: d.get("value") for q, d in qs.items()} for c, qs in combined.items()})
     for cond in st.results:
         out[cond] = {}
         for q, _, _ in QUANTITIES:
             a, lim = setting_value(st, cond, q), combined.get(cond, {}).get(q, {}).get("value")
-            _relative(a, lim, out[cond], q)
+            _relative(a, lim, out[cond], q, scale.get(q, 0.0))
     return out
 
 
@@ -413,8 +436,8 @@ def limit_uncertainty_pct(combined: dict[str, dict[str, dict[str, Any]]], q: str
     us = []
     for c in combined.values():
         d = c.get(q, {})
-        if d.get("value") == 0.0:
-            continue
+        if d.get("value") == 0.0 and d.get("uncertainty") is not None:
+            continue  # a known zero (stuck): no relative band
         if d.get("uncertainty") is None or not d.get("value"):
             return None
         us.append(abs(d["uncertainty"]) / abs(d["value"]) * 100.0)
