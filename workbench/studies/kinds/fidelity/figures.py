@@ -334,8 +334,10 @@ def plot_base_vs_limit(
     "base", "reference"), ``time_s`` and per quantity its worst error against
     the limit (percent) over the cases where the limit is trusted (None: none
     is). ``base``: ``time_s`` and per quantity a list of ``(case, error %,
-    uncertainty %)`` for the trusted cases, and ``untrusted[quantity]``: the
-    cases with no trusted limit, named on the panel instead of a number.
+    uncertainty %)`` for the trusted cases, ``untrusted[quantity]``: the
+    cases with no trusted limit, named on the panel instead of a number, and optional
+    ``stuck[quantity]``: the cases whose base value is 0 (a stuck damper's energy),
+    counted on the panel, never drawn as an error.
     Optional ``production`` (per quantity, as the base's lists) and
     ``production_time_s``: the production job's own model, drawn hollow.
     """
@@ -350,7 +352,9 @@ def plot_base_vs_limit(
     gcol["reference"] = "0.45"
     all_cases = list(
         dict.fromkeys(
-            [c for q in qs for c, _, _ in base[q]] + [c for q in qs for c in base["untrusted"][q]]
+            [c for q in qs for c, _, _ in base[q]]
+            + [c for q in qs for c in base["untrusted"][q]]
+            + [c for q in qs for c in base.get("stuck", {}).get(q, [])]
         )
     )
     colors = force_colors([_force_of(c) for c in all_cases])
@@ -396,13 +400,17 @@ def plot_base_vs_limit(
             ax.set_xticks([])
             ax.set_yticks([])
         bad = base["untrusted"][q]
-        if bad:
+        stuck = base.get("stuck", {}).get(q, [])
+        if bad or stuck:
             n_all = len(all_cases)
             names = "\n".join(bad) if len(bad) <= 4 else "(the report names them)"
+            text = f"no trusted limit for {len(bad)} of {n_all} cases (no error given):\n" + names
+            if stuck:  # a stuck damper's energy: 0, and no error is relative to 0
+                text = (text + "\n" if bad else "") + f"0 (stuck) for {len(stuck)}: no error"
             ax.text(
                 0.02,
                 0.98,
-                f"no trusted limit for {len(bad)} of {n_all} cases (no error given):\n" + names,
+                text,
                 transform=ax.transAxes,
                 fontsize=7,
                 va="top",

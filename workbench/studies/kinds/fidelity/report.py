@@ -306,7 +306,10 @@ def _base_section(
     base = next(s for s in settings if s.role == "base")
     table = base_vs_limit(base, summary, conds, production)
     qs = [q for q, _, _ in QUANTITIES]
-    trusted = {q: [c for c in conds if table[c][q]["trusted"]] for q in qs}
+    # a damper stuck at the peak: its energy is 0 and no error is relative to it; named on
+    # the chart, never drawn as a 0 % error
+    stuck = {q: [c for c in conds if table[c][q]["base"] == 0.0] for q in qs}
+    trusted = {q: [c for c in conds if table[c][q]["trusted"] and c not in stuck[q]] for q in qs}
 
     def worst_trusted(st: Setting, q: str) -> float | None:
         es = [st.limit_errors.get(c, {}).get(q) for c in trusted[q]]
@@ -325,7 +328,8 @@ def _base_section(
     ]
     marks: dict[str, Any] = {
         "time_s": base.time_s,
-        "untrusted": {q: [c for c in conds if c not in trusted[q]] for q in qs},
+        "untrusted": {q: [c for c in conds if c not in trusted[q] + stuck[q]] for q in qs},
+        "stuck": stuck,
     }
     for q in qs:
         marks[q] = [
