@@ -193,6 +193,25 @@ def _fit(h: np.ndarray, q: np.ndarray, p: float) -> tuple[float, float, float]:
     return float(q0), float(c), float(r @ r)
 
 
+def _levels(h: Sequence[float], q: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+    """The levels as arrays (fineness, value), finest first."""
+    pairs = sorted(zip((float(x) for x in h), (float(y) for y in q), strict=True))
+    return np.array([a for a, _ in pairs]), np.array([b for _, b in pairs])
+
+
+def _order_scan(x: np.ndarray, q: np.ndarray, p_range: tuple[float, float], n: int) -> list:
+    """The residual sum of squares of ``q0 + c x^p`` at ``n`` orders log-spaced over
+    ``p_range``, lowest first."""
+    grid = np.exp(np.linspace(np.log(p_range[0]), np.log(p_range[1]), n))
+    return [_fit(x, q, p)[2] for p in grid]
+
+
+def _turns(d: np.ndarray) -> bool:
+    """Whether the non-zero differences ``d`` change sign somewhere."""
+    dn = d[d != 0.0]
+    return bool(np.any(np.sign(dn[1:]) != np.sign(dn[:-1])))
+
+
 def least_squares(
     h: Sequence[float],
     q: Sequence[float],
@@ -216,15 +235,12 @@ def least_squares(
     or not at all (a point load's log(1/h)): None. ``reason``: why the three-level
     estimate did not do.
     """
-    pairs = sorted(zip((float(x) for x in h), (float(y) for y in q), strict=True))
-    n = len(pairs)
+    hh, qq = _levels(h, q)
+    n = len(hh)
     if n < 4:
         return None
-    hh = np.array([a for a, _ in pairs])
-    qq = np.array([b for _, b in pairs])
     x = hh / hh[0]  # fineness relative to the finest level: well-scaled powers
-    grid = np.exp(np.linspace(np.log(p_range[0]), np.log(p_range[1]), 200))
-    if int(np.argmin([_fit(x, qq, p)[2] for p in grid])) == 0:
+    if int(np.argmin(_order_scan(x, qq, p_range, 200))) == 0:
         return None  # the data want an order at or below the range: no convergence to fit
     delta = float(qq.max() - qq.min()) / (n - 1)
     if delta == 0.0:
@@ -250,14 +266,10 @@ def fit_scatter(h: Sequence[float], q: Sequence[float]) -> float | None:
     the best least-squares fit ``q0 + c h^p``, its order scanned over ``P_RANGE`` (units
     of ``q``; three fitted parameters); None with fewer levels. A clean power law of any
     order in the range has (nearly) none: only what no trend explains counts."""
-    pairs = sorted(zip((float(x) for x in h), (float(y) for y in q), strict=True))
-    if len(pairs) < 4:
+    hh, qq = _levels(h, q)
+    if len(hh) < 4:
         return None
-    hh = np.array([a for a, _ in pairs])
-    qq = np.array([b for _, b in pairs])
-    grid = np.exp(np.linspace(np.log(P_RANGE[0]), np.log(P_RANGE[1]), 400))
-    rss = min(_fit(hh / hh[0], qq, p)[2] for p in grid)
-    return math.sqrt(rss / (len(pairs) - 3))
+    return math.sqrt(min(_order_scan(hh / hh[0], qq, P_RANGE, 400)) / (len(hh) - 3))
 
 
 def data_range(
@@ -273,18 +285,16 @@ def data_range(
     before it (the three-level rule's test of a growing oscillation). The value is the
     finest level's; no correction.
     """
-    pairs = sorted(zip((float(x) for x in h), (float(y) for y in q), strict=True))
-    if len(pairs) < 4:
+    hh, qq = _levels(h, q)
+    if len(hh) < 4:
         return None
-    hh = np.array([a for a, _ in pairs])
-    qq = np.array([b for _, b in pairs])
     if len(set(hh.tolist())) != len(hh) or hh[0] <= 0:
         raise ValueError(f"fineness must be positive and distinct: {list(h)}")
     d = np.diff(qq)
     nz = d != 0.0
     dn = d[nz]
-    if np.count_nonzero(nz) < 2 or not np.any(np.sign(dn[1:]) != np.sign(dn[:-1])):
-        return None  # monotone: a fit or nothing, never this bound
+    if not _turns(d):
+        return None  # monotone (or fewer than two steps): a fit or nothing, never this bound
     hm = np.sqrt(hh[1:] * hh[:-1])[nz]
     p_star = float(np.polyfit(np.log(hm), np.log(np.abs(d[nz])), 1)[0])
     if not p_star > 0.0:
@@ -308,7 +318,6 @@ def richardson(
     safety: float = SAFETY,
     rtol_converged: float = 1e-9,
     noise: float | None = None,
-    noise_what: str = "the quantity's resolution",
     scatter: float | None = None,
 ) -> LimitEstimate:
     """The converged value of ``q`` from its finest three levels, with the observed order.
@@ -324,10 +333,10 @@ def richardson(
     difference between the three-level and a two-level extrapolation is
     not used: with the observed order the two coincide by construction.
     ``noise``: the quantity's resolution in its units (None or 0: none known); a ladder
-    whose finest three levels lie within it is bounded by it (module doc); ``noise_what``
-    names it in the reason. ``scatter``: the model's re-meshing scatter (None: none);
-    finest three levels that oscillate within it are bounded by it (x ``safety``), as
-    they are by a resolution; a monotone trend is read as usual.
+    whose finest three levels lie within it is bounded by it (module doc). ``scatter``:
+    the model's re-meshing scatter (None: none); finest three levels that oscillate
+    within it are bounded by it (x ``safety``), as they are by a resolution; a monotone
+    trend is read as usual.
     """
     pairs = sorted(
         (float(hh), float(qq))
@@ -354,10 +363,10 @@ def richardson(
         if fit is not None:
             return fit
         if n >= 4:  # say why the levels beyond the finest three did not help either
-            d = np.diff(qs_)
-            turns = np.any(np.sign(d[d != 0][1:]) != np.sign(d[d != 0][:-1]))
             reason += f"; over all {n} levels no converging order fits" + (
-                " and the oscillation does not shrink towards the finest" if turns else ""
+                " and the oscillation does not shrink towards the finest"
+                if _turns(np.diff(qs_))
+                else ""
             )
         return fallback(reason, order)
 
@@ -380,8 +389,8 @@ def richardson(
 
     if noise and spread <= noise:
         why = (
-            f"the finest three levels differ by {spread:.3g}, within {noise_what} "
-            f"{noise:.3g}; bounded by it (x {safety:g})"
+            f"the finest three levels differ by {spread:.3g}, within the quantity's "
+            f"resolution {noise:.3g}; bounded by it (x {safety:g})"
         )
         return LimitEstimate(finest, safety * noise, None, False, "bounded", why, finest, 3)
 
