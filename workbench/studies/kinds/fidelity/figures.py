@@ -393,7 +393,6 @@ def plot_base_vs_limit(
                               hollow=hollow)  # fmt: skip
                 handles.setdefault(label.format(case), h)
                 drawn = True
-            drawn = True
         if drawn:
             _log_axes(ax)
         else:
@@ -455,6 +454,13 @@ def _case_bar(ax, x, e, u, bottom, marker, color, hollow=False):
     return h
 
 
+def stuck_cases(table: dict[str, dict[str, dict[str, Any]]], q: str) -> list[str]:
+    """The conditions of ``report_base.base_vs_limit``'s ``table`` whose base value of
+    ``q`` is 0: a damper stuck at the peak dissipates nothing, and no error is relative to
+    0, so the charts name these cases instead of drawing an error."""
+    return [c for c, qs in table.items() if qs[q].get("base") == 0.0]
+
+
 @styled
 def plot_base_per_knob(table: dict[str, dict[str, dict[str, Any]]], path: str | Path) -> Path:
     """The base's error against each knob's own limit, per case, with its uncertainty.
@@ -476,7 +482,7 @@ def plot_base_per_knob(table: dict[str, dict[str, dict[str, Any]]], path: str | 
     for ax, q in zip(axes, qs, strict=True):
         tr = blended_transform_factory(ax.transData, ax.transAxes)
         ys = []
-        stuck = {c for c in conds if table[c][q].get("base") == 0.0}
+        stuck = set(stuck_cases(table, q))
         for i, c in enumerate(conds):
             if c in stuck:  # a stuck damper's energy: 0, and no error is relative to 0
                 ax.text(i, 0.04, "0 (stuck)", transform=tr, rotation=90, ha="center",

@@ -300,15 +300,13 @@ def _base_section(
 ) -> dict[str, Any]:
     """The base setting (and the production model's, if any) against the limit: its chart,
     tables and section (report_base.py)."""
-    from .figures import plot_base_per_knob, plot_base_vs_limit
+    from .figures import plot_base_per_knob, plot_base_vs_limit, stuck_cases
     from .report_base import base_section, base_vs_limit
 
     base = next(s for s in settings if s.role == "base")
     table = base_vs_limit(base, summary, conds, production)
     qs = [q for q, _, _ in QUANTITIES]
-    # a damper stuck at the peak: its energy is 0 and no error is relative to it; named on
-    # the chart, never drawn as a 0 % error
-    stuck = {q: [c for c in conds if table[c][q]["base"] == 0.0] for q in qs}
+    stuck = {q: stuck_cases(table, q) for q in qs}  # named on the chart, never drawn
     trusted = {q: [c for c in conds if table[c][q]["trusted"] and c not in stuck[q]] for q in qs}
 
     def worst_trusted(st: Setting, q: str) -> float | None:
