@@ -75,6 +75,7 @@ from ....post.fidelity import (
     pick_error,
     relative_errors,
     setting_row,
+    setting_value,
 )
 from ....post.knobs import KNOBS
 from ....post.pareto import pareto_front, pick_cheapest
@@ -87,7 +88,10 @@ from .ladders import (
     _check_sampling,
     _settings_dict,
     base_values,
+    held_values,
     knob_applies,
+    knob_levels,
+    ladder_pivot,
     plan_settings,
     propose_combination,
     sampled,
@@ -269,6 +273,30 @@ class _Computer:
 # ---- the study ----------------------------------------------------------------------------
 
 
+def _knob_limits(
+    limits: dict[str, dict[str, dict[str, Any]]], ladders: dict[str, list[Setting]], base: Setting
+) -> dict[str, dict[str, dict[str, dict[str, Any]]]]:
+    """knob -> condition -> quantity -> the knob's limit estimate as a dict, with ``pivot``:
+    the value at the ladder's level of the base's value of the knob (the base, or the base's
+    value at the values the ladder holds: ``held_values``; None without such a level) and
+    ``pivot_label``. The knob's error of the base is the pivot's against the knob's limit."""
+    out: dict[str, dict[str, dict[str, dict[str, Any]]]] = {}
+    for k, lim in limits.items():
+        piv = ladder_pivot(k, ladders[k], base)
+        out[k] = {
+            c: {
+                q: dict(
+                    e.as_dict(),
+                    pivot=setting_value(piv, c, q) if piv is not None else None,
+                    pivot_label=piv.label if piv is not None else None,
+                )
+                for q, e in qs.items()
+            }
+            for c, qs in lim.items()
+        }
+    return out
+
+
 def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> dict[str, Any]:
     """Run a fidelity study into ``out`` (resuming); return the JSON summary."""
     from ....log import mpi_size
@@ -359,9 +387,12 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
                 ladders.items(), ladder_self_errors(ladders).values(), strict=True
             )
         },
-        "knob_limits": {
-            k: {c: {q: e.as_dict() for q, e in qs.items()} for c, qs in lim.items()}
-            for k, lim in limits.items()
+        "knob_limits": _knob_limits(limits, ladders, settings[0]),
+        "held": {
+            k: {kk: level_label(kk, vv) for kk, vv in held.items()}
+            for k, held in held_values(
+                spec, comp.dampers, comp.base_values, knob_levels(spec)
+            ).items()
         },
         "limit": combined,
         "base": {k: level_label(k, v) for k, v in settings[0].values.items()},

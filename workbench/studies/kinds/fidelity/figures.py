@@ -153,8 +153,10 @@ def plot_knob(
     times_s: Sequence[float],
     errors: dict[str, dict[str, Sequence[float | None]]],
     path: str | Path,
+    held: str = "",
 ) -> Path:
-    """Error vs time of one knob's levels: ``errors[quantity][condition][level]`` in percent."""
+    """Error vs time of one knob's levels: ``errors[quantity][condition][level]`` in percent.
+    ``held``: the other knobs the ladder holds away from the base, in words ("" none)."""
     plt = pyplot()
     qs = list(errors)
     fig, axes = plt.subplots(1, len(qs), figsize=(FIGSIZE[0] * 1.6, FIGSIZE[1] * 0.95))
@@ -208,7 +210,10 @@ def plot_knob(
                    ncol=ncol, fontsize=7, frameon=False)  # fmt: skip
         rows = -(-len(conds) // ncol)
         fig.tight_layout(rect=(0, 0.06 + 0.045 * rows, 1, 0.95))
-    fig.suptitle(f"{knob}: error vs compute time (other knobs at the base setting)", fontsize=11)
+    where = f"; {held}" if held else ""
+    fig.suptitle(
+        f"{knob}: error vs compute time (other knobs at the base setting{where})", fontsize=11
+    )
     return save_figure(fig, path)
 
 

@@ -112,11 +112,14 @@ def plan_settings(
     base = add(dict(base_v), "base", "base")
     base.members.append(("base", "base"))
     ladders: dict[str, list[Setting]] = {}
+    held = held_values(spec, dampers, base_v, levels)
     for knob, lv in levels.items():
         ladders[knob] = []
         for v in lv:
-            vals = sampled(base_v, dict(base_v, **{knob: v}))
-            label = level_label(knob, v)
+            vals = sampled(base_v, dict(base_v, **held.get(knob, {}), **{knob: v}))
+            label = level_label(knob, v) + "".join(
+                f", {level_label(k, x)}" for k, x in held.get(knob, {}).items()
+            )
             if vals["nt"] != base_v["nt"] and knob == "harmonics":
                 label += f", nt {vals['nt']}"
             st = add(vals, label, "knob")
@@ -140,6 +143,64 @@ def plan_settings(
     for st in unique.values():
         _check_sampling(st.values)
     return list(unique.values()), ladders
+
+
+def held_values(
+    spec: StudySpec, dampers: list[str], base_v: dict[str, Any], levels: dict[str, list[Any]]
+) -> dict[str, dict[str, Any]]:
+    """knob -> the other knobs' values its ladder holds away from the base (empty: none).
+
+    Only the points per line have one: ``points-contact-mesh-size``, the contact mesh
+    size their ladder runs at. The size at the contact points is capped by their spacing
+    (``workbench.geometry.layout``), so at the base's size a level with more points also
+    refines the mesh at the lines and its step mixes two knobs. The size must therefore be
+    at or below the contact spacing of the finest level on every damper the points reach,
+    and the levels must include the base's points: that level is the ladder's *pivot*,
+    the base's points at the held size (:func:`ladder_pivot`), which the knob's error of the
+    base is read from. The knob's correction of the limit (its limit minus its finest level)
+    is taken at the held size, the other knobs' at the base: the knobs' errors are assumed
+    to add, as everywhere in the all-knob limit."""
+    size = spec.fidelity.points_contact_mesh_size
+    if size is None or "points-per-line" not in levels:
+        return {}
+    param = "points-contact-mesh-size"
+    lv = levels["points-per-line"]
+    if base_v["points-per-line"] not in lv:
+        raise InputError(
+            "levels-points-per-line",
+            lv,
+            f"levels that include the base's {base_v['points-per-line']} points per line "
+            f"(with {param} = {size:g} mm that level is the ladder's pivot)",
+        )
+    from ....geometry import load_geometry_params
+    from ....geometry.layout import make_layout
+    from ....geometry.shapes import get as get_shape
+
+    finest = max(lv)
+    for damper in dampers:
+        if not knob_applies("points-per-line", damper):
+            continue
+        name, kind = get_shape(damper).study_options["points-per-line"]
+        gp = load_geometry_params(
+            damper, spec.geometry, {damper: {name: kind(finest)}}, base_v["mesh-size"]
+        )
+        spacing = make_layout(gp).contact_spacing
+        if size > spacing * (1.0 + 1e-9):
+            raise InputError(
+                param,
+                size,
+                f"at most {spacing:.4g} mm, the {damper}'s contact spacing at {finest} points "
+                "per line (a larger size is capped by the spacing there, so the ladder would "
+                "refine the mesh at the lines as well as the points)",
+            )
+    return {"points-per-line": {"contact-mesh-size": float(size)}}
+
+
+def ladder_pivot(knob: str, ladder: list[Setting], base: Setting) -> Setting | None:
+    """The level of ``knob``'s ladder at the base's value of it: the base itself, or the
+    base's value at the values the ladder holds (:func:`held_values`). None if the
+    ladder has no such level."""
+    return next((st for st in ladder if st.values[knob] == base.values[knob]), None)
 
 
 def sampled(base_v: dict[str, Any], values: dict[str, Any]) -> dict[str, Any]:

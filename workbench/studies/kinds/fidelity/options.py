@@ -106,6 +106,20 @@ class FidelityOptions:
         hi=400,
         unit="per line",
     )
+    points_contact_mesh_size: float | None = option(
+        "float",
+        None,
+        "fidelity: the contact mesh size the points-per-line ladder runs at, mm (none: the "
+        "base's). The size at the points is capped by their spacing, so at the base's size "
+        "the finer levels also refine the mesh at the lines; at or below the finest level's "
+        "spacing every level has the same size there and the ladder measures the points "
+        "alone (its levels must then include the base's points)",
+        "fidelity",
+        lo=0.2,
+        hi=50.0,
+        optional=True,
+        unit="mm",
+    )
     levels_rigid_damper: list[str] = option(
         "strs",
         ["rigid", "flexible"],

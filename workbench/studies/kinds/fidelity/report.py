@@ -116,6 +116,7 @@ def fidelity_outputs(
                 for q, _, _ in QUANTITIES
             },
             figs / f"fidelity_{knob}.png",
+            held=", ".join((summary.get("held") or {}).get(knob, {}).values()),
         )
         trows = []
         for s, own in zip(lad, self_err[knob], strict=True):
@@ -142,7 +143,13 @@ def fidelity_outputs(
                 "title": f"Knob: {knob}",
                 "text": [
                     f"{knob} moved over {len(lad)} levels, the other knobs at the base "
-                    "setting. Errors relative to the reference, in percent; time is the "
+                    "setting"
+                    + "".join(
+                        f" but {', '.join(h.values())}"
+                        for h in [(summary.get("held") or {}).get(knob, {})]
+                        if h
+                    )
+                    + ". Errors relative to the reference, in percent; time is the "
                     "whole cost of the setting (geometry + reduction + assembly + HBM of "
                     f"every condition), s. Log-log; errors below {1e-4:g} % are drawn at "
                     f"{1e-4:g} % (open markers). Against the reference, a one-knob setting "

@@ -9,8 +9,10 @@ from the converged model?". Per condition and quantity this module gives
   uncertainty, ONLY where that limit is trusted (``trusted``); elsewhere
   no number, the reason instead;
 * per knob, the base's error against that knob's own Richardson limit (the
-  other knobs at the base, so the base is a level of that ladder), again
-  only where the knob's finest levels extrapolate or bound it;
+  other knobs at the base, so the base is a level of that ladder; where the
+  ladder holds another knob away from the base, as the points per line at
+  ``points-contact-mesh-size``, its level at the base's value of the knob),
+  again only where the knob's finest levels extrapolate or bound it;
 * the base's error against the reference (every knob at its finest level),
   which is no limit but a measured difference.
 
@@ -67,7 +69,11 @@ def base_vs_limit(
                 e = by_cond.get(cond, {}).get(q)
                 if e is None or e["reason"] == NOT_APPLICABLE or e["method"] == "not applicable":
                     continue
-                ok = bool(e["trusted"]) and v is not None and e["value"] is not None
+                # the knob's own error of the base: its ladder's level at the base's value
+                # of the knob (the base, or that value where the ladder holds other knobs;
+                # the base's own value where the ladder has no such level)
+                at = e["pivot"] if e.get("pivot") is not None else v
+                ok = bool(e["trusted"]) and at is not None and e["value"] is not None
                 knobs[knob] = {
                     "limit": e["value"] if ok else None,
                     "uncertainty": e["uncertainty"] if ok else None,
@@ -75,7 +81,8 @@ def base_vs_limit(
                     "asymptotic": bool(e["asymptotic"]),
                     "trusted": bool(e["trusted"]),
                     "method": e["method"],
-                    "error_vs_limit_pct": _pct(v - e["value"], e["value"]) if ok else None,
+                    "at": e.get("pivot_label") if e.get("pivot") is not None else "base",
+                    "error_vs_limit_pct": _pct(at - e["value"], e["value"]) if ok else None,
                     "uncertainty_pct": _pct(e["uncertainty"], e["value"]) if ok else None,
                     "reason": e["reason"],
                 }
@@ -130,6 +137,7 @@ def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
                 "quantity": q,
                 "limit of": "all knobs",
                 "base": d["base"],
+                "knob's error at": "",
                 "limit": d["limit"],
                 "uncertainty": d["uncertainty"],
                 "error vs limit %": d["error_vs_limit_pct"],
@@ -160,6 +168,7 @@ def rows(table: dict[str, dict[str, dict[str, Any]]]) -> list[dict[str, Any]]:
                         "quantity": q,
                         "limit of": knob,
                         "base": d["base"],
+                        "knob's error at": k.get("at", "base"),
                         "limit": k["limit"],
                         "uncertainty": k["uncertainty"],
                         "error vs limit %": k["error_vs_limit_pct"],
@@ -236,6 +245,12 @@ def base_section(
         "the base's error against the reference (every knob at its finest level: a measured "
         "difference, not a limit).",
     ]
+    for knob, held in (summary.get("held") or {}).items():
+        text.append(
+            f"The {knob} ladder holds {', '.join(held.values())} (not the base's), so that "
+            "no level refines the mesh at the lines; its error of the base is read at the "
+            f"base's {knob} there, and its correction of the limit is taken there."
+        )
     for cond in conditions:
         for q, name, _ in QUANTITIES:
             text.append(f"{cond}, {name}: {_cell(table[cond][q])}.")
