@@ -37,6 +37,7 @@ _SOURCES = (
     "build.py",
     "layout.py",
     "occ.py",
+    "mirror.py",
     "mshio.py",
     "params.py",
     "records.py",

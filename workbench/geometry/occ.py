@@ -164,8 +164,11 @@ def _groups(gmsh, body: str, members: dict[str, list[int]]) -> None:
                 gmsh.model.setPhysicalName(dim, tag, name)
 
 
-def mesh_and_write(gmsh, path: Path, what: str) -> None:
-    """Generate the 3-D mesh, raise it to order 2 and write it (metres) atomically."""
+def mesh_and_write(gmsh, path: Path, what: str, body: str = "", mirror: bool = False) -> None:
+    """Generate the 3-D mesh, raise it to order 2 and write it (metres) atomically.
+
+    ``mirror``: the model is the half x >= 0 of ``body`` ("rig" or "damper"); the mesh
+    written is it and its mirror image (:func:`workbench.geometry.mirror.mirror_model`)."""
     try:
         gmsh.model.mesh.generate(3)
         gmsh.model.mesh.setOrder(2)
@@ -174,6 +177,11 @@ def mesh_and_write(gmsh, path: Path, what: str) -> None:
             f"gmsh could not mesh the {what}: {e} {_last_errors(gmsh)} (try another "
             f"rig.mesh.size_mm or rig.mesh.contact_size_mm)"
         ) from None
+    if mirror:
+        from .mirror import mirror_model
+
+        tags = {name: tag for names in GROUPS[body].values() for name, tag in names.items()}
+        mirror_model(gmsh, tags, what)
     types, _, _ = gmsh.model.mesh.getElements(3)
     if list(types) != [11]:
         raise MeshingError(
@@ -193,15 +201,24 @@ def mesh_and_write(gmsh, path: Path, what: str) -> None:
             tmp.unlink()
 
 
+def sides(lay: Layout) -> tuple[int, ...]:
+    """The sides (0: blade 1's, x < 0; 1: blade 2's) a builder draws: both, or blade 2's
+    alone where the mesh is mirrored (``[rig.mesh] mirror``)."""
+    return (1,) if lay.params.rig.mesh.mirror else (0, 1)
+
+
 def build_rig(gmsh: Any, lay: Layout, path: Path) -> None:
-    """Draw, mesh and write the rig: base, two blades with platforms, embedded points."""
+    """Draw, mesh and write the rig: base, two blades with platforms, embedded points
+    (mirrored: the half x >= 0, then its mirror image, :mod:`workbench.geometry.mirror`)."""
     occ = gmsh.model.occ
     gmsh.model.add("rig")
     b = lay.base
-    base = occ.addBox(b.x0, b.y0, b.z0, b.dx, b.dy, b.dz)
+    mirror = lay.params.rig.mesh.mirror
+    x0 = 0.0 if mirror else b.x0  # the rig is symmetric about x = 0
+    base = occ.addBox(x0, b.y0, b.z0, b.x0 + b.dx - x0, b.dy, b.dz)
     blades = []
     y0, y1 = lay.platform_y
-    for k in range(2):
+    for k in sides(lay):
         bx = lay.blades[k]
         blade = occ.addBox(bx.x0, bx.y0, bx.z0, bx.dx, bx.dy, bx.dz)
         corners = [occ.addPoint(x, y0, z) for x, z in lay.platform_xz[k]]
@@ -213,7 +230,7 @@ def build_rig(gmsh: Any, lay: Layout, path: Path) -> None:
         blades.append(fused)
     occ.fragment([(3, base)], [dt for f in blades for dt in f])
     occ.synchronize()
-    vols = {"base": [], "blade_1": [], "blade_2": []}
+    vols: dict[str, list[int]] = {"base": [], **{f"blade_{k + 1}": [] for k in sides(lay)}}
     for _, v in gmsh.model.getEntities(3):
         x, _, z = occ.getCenterOfMass(3, v)
         if z < lay.base.dz:
@@ -229,7 +246,7 @@ def build_rig(gmsh: Any, lay: Layout, path: Path) -> None:
         )
     ]
     point_tags: list[int] = []
-    for k in range(2):
+    for k in sides(lay):
         pts = lay.points[lay.side == k]
         face = face_containing(gmsh, lay.normals[k], pts, f"the contact face of blade {k + 1}")
         members[f"contact_face_{k + 1}"] = [face]
@@ -238,7 +255,7 @@ def build_rig(gmsh: Any, lay: Layout, path: Path) -> None:
         point_tags += tags
     for name, pts in (("excitation", lay.excitation), ("response", lay.response)):
         members[name] = []
-        for k in range(2):
+        for k in sides(lay):
             face = face_containing(
                 gmsh, np.array([1.0, 0.0, 0.0]), pts[k], f"the {name} point of blade {k + 1}"
             )
@@ -247,7 +264,7 @@ def build_rig(gmsh: Any, lay: Layout, path: Path) -> None:
     ms = lay.params.rig.mesh
     h_c = min(ms.contact_size_mm, lay.contact_spacing, ms.size_mm)
     size_field(gmsh, point_tags, h_c, ms.size_mm, ms.refine_distance_mm)
-    mesh_and_write(gmsh, path, "rig")
+    mesh_and_write(gmsh, path, "rig", "rig", mirror)
 
 
 def _rotate_seam_down(gmsh, vol: int, origin: np.ndarray, axis: np.ndarray) -> None:
@@ -283,18 +300,25 @@ def embed_on_lateral_face(
     lateral_type: str,
     members: dict[str, list[int]],
     point_tags: list[int],
-) -> None:
+) -> int:
     """A solid of revolution just added (``vol``): turn its seam down and embed each side's
-    contact points in its one lateral face (gmsh type ``lateral_type``: "Cone", "Cylinder")."""
+    contact points in its one lateral face (gmsh type ``lateral_type``: "Cone", "Cylinder").
+    Mirrored (``[rig.mesh] mirror``): cut to its half x >= 0 first (the seam, turned down,
+    lies in the plane x = 0) and embed side 2's points only. Returns the volume's tag."""
     gmsh.model.occ.synchronize()
     _rotate_seam_down(gmsh, vol, origin, axis)
+    if lay.params.rig.mesh.mirror:
+        from .mirror import keep_half
+
+        (vol,) = keep_half(gmsh, [(3, vol)])
     lateral = [s for _, s in gmsh.model.getEntities(2) if gmsh.model.getType(2, s) == lateral_type]
     if len(lateral) != 1:
         raise MeshingError(f"internal: the damper has {len(lateral)} {lateral_type} faces")
-    for k in range(2):
+    for k in sides(lay):
         tags = embed_points(gmsh, lay.points[lay.side == k], lateral[0])
         members[f"contact_nodes_{k + 1}"] = tags
         point_tags += tags
+    return vol
 
 
 def build_damper(gmsh: Any, lay: Layout, path: Path) -> None:
@@ -316,4 +340,4 @@ def build_damper(gmsh: Any, lay: Layout, path: Path) -> None:
     h = min(ms.damper_size_mm, ms.size_mm)
     h_c = min(ms.contact_size_mm, lay.contact_spacing, h)
     size_field(gmsh, point_tags, h_c, h, ms.refine_distance_mm)
-    mesh_and_write(gmsh, path, f"damper ({pl['kind']})")
+    mesh_and_write(gmsh, path, f"damper ({pl['kind']})", "damper", ms.mirror)

@@ -140,6 +140,12 @@ class MeshSizes:
         "width of the pad tied to each contact point (workbench/fe/pads.py); 0: the node alone, mm",
         lo=0.0,
     )
+    mirror: bool = param(
+        False,
+        "mesh the half x >= 0 of the rig and of the damper and mirror it about the plane "
+        "between the blades, so the two platforms and contact lines have mirror-image meshes "
+        "(workbench/geometry/mirror.py; not on the bladed disk's sector)",
+    )
     refine_distance_mm: float = param(
         12.0,
         "distance from the contact points over which the size grows back, mm",

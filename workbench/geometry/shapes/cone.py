@@ -154,8 +154,7 @@ def draw(gmsh: Any, lay: Any, members: dict, point_tags: list) -> int:
     c1, c2 = pl["c1"], pl["c2"]
     vol = occ.addCone(*map(float, c2), *map(float, c1 - c2), pl["r2"], pl["r1"])
     origin, axis = c2, -pl["axis"]
-    embed_on_lateral_face(gmsh, lay, vol, origin, axis, "Cone", members, point_tags)
-    return vol
+    return embed_on_lateral_face(gmsh, lay, vol, origin, axis, "Cone", members, point_tags)
 
 
 SHAPE = DamperShape(

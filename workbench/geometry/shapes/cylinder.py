@@ -99,8 +99,7 @@ def draw(gmsh: Any, lay: Any, members: dict, point_tags: list) -> int:
     c = pl["center"]
     vol = occ.addCylinder(0.0, pl["y0"], float(c[2]), 0.0, pl["length"], 0.0, pl["radius"])
     origin, axis = np.array([0.0, pl["y0"], c[2]]), np.array([0.0, 1.0, 0.0])
-    embed_on_lateral_face(gmsh, lay, vol, origin, axis, "Cylinder", members, point_tags)
-    return vol
+    return embed_on_lateral_face(gmsh, lay, vol, origin, axis, "Cylinder", members, point_tags)
 
 
 SHAPE = DamperShape(

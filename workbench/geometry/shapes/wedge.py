@@ -164,8 +164,9 @@ def hit_blame(gp: Any, g: dict, pl: dict, x_max: float):
 
 
 def draw(gmsh: Any, lay: Any, members: dict, point_tags: list) -> int:
-    """The section extruded along y; the contact points embedded in the two contact faces."""
-    from ..occ import embed_points, face_containing
+    """The section extruded along y; the contact points embedded in the two contact faces
+    (mirrored, ``[rig.mesh] mirror``: its half x >= 0 and side 2's face only)."""
+    from ..occ import embed_points, face_containing, sides
 
     occ = gmsh.model.occ
     pl = lay.damper
@@ -176,7 +177,11 @@ def draw(gmsh: Any, lay: Any, members: dict, point_tags: list) -> int:
     ext = occ.extrude([(2, face)], 0.0, pl["length"], 0.0)
     occ.synchronize()
     vol = [t for d, t in ext if d == 3][0]
-    for k in range(2):
+    if lay.params.rig.mesh.mirror:
+        from ..mirror import keep_half
+
+        (vol,) = keep_half(gmsh, [(3, vol)])
+    for k in sides(lay):
         pts = lay.points[lay.side == k]
         f = face_containing(gmsh, lay.normals[k], pts, f"wedge contact face {k + 1}")
         members[f"contact_face_{k + 1}"] = [f]
