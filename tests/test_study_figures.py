@@ -177,6 +177,28 @@ def test_energy_table_is_tables_1_2(study):
     assert cell.endswith("(failed)")
 
 
+def test_energy_split_table_gives_each_lines_share(study):
+    """Platform 1's line minus platform 2's, % of both, at the harmonic-1 peak; a contact
+    that does not slip (the stuck cylinder in phase) has no split."""
+    from workbench.post.tables import STUCK_TEXT, energy_split_table
+
+    for phase in (0.0, 180.0):
+        t = energy_split_table(study, phase)
+        assert t.header[0].startswith("damper: energy on platform 1's line")
+        for row in t.rows:
+            for cell, c in zip(row[1:], curve_set(study, row[0], phase), strict=True):
+                e = c.energy_mj[c.h1_peak_index]
+                e1, e2 = e[c.side == 0].sum(), e[c.side == 1].sum()
+                if e1 + e2 <= 1e-3:
+                    assert cell.startswith(STUCK_TEXT), (row[0], phase, cell)
+                    continue
+                value = float(cell.split()[0])
+                assert value == pytest.approx((e1 - e2) / (e1 + e2) * 100, abs=0.05)
+                assert c.summary()["h1_friction_energy_split_pct"] == pytest.approx(
+                    (e1 - e2) / (e1 + e2) * 100, rel=1e-12
+                )
+
+
 def test_status_shares_and_forces(study):
     forces, shares = status_share_curves(curve_set(study, "cone", 0.0))
     total = sum(shares.values())

@@ -32,6 +32,9 @@ from ..io import atomic_path
 
 STATUS_NAMES = ("stuck", "stick-slip", "partial separation", "full separation")
 STATUS_KEYS = ("stuck", "stick_slip", "partial_separation", "full_separation")
+# below this friction energy per cycle (mJ) a loop is the time sampling's round-off (the
+# stuck wedge's -0.001 mJ on the paper rig), and its split between the lines means nothing
+SPLIT_FLOOR_MJ = 1e-3
 
 
 def family_name(phase_deg: float) -> str:
@@ -177,6 +180,21 @@ class CaseResult:
         """(n_points, n_pairs) friction energy per cycle of every pair, mJ."""
         return self.branch.friction_energy * 1e3
 
+    def energy_split_pct(self, i: int | None = None) -> float | None:
+        """The friction energy per cycle of platform 1's pairs minus platform 2's, in percent
+        of their sum, at point ``i`` (default: the harmonic-1 peak). The two-blade rig and
+        its in- and out-of-phase loading are symmetric about the plane between the blades,
+        so a symmetric solution splits evenly (0); a mesh whose halves differ tips it
+        (docs/notes/mesh_symmetry.md). None where the contact does not slip (the energy is
+        at most :data:`SPLIT_FLOOR_MJ`) or there is no point."""
+        i = self.h1_peak_index if i is None else i
+        if i < 0:
+            return None
+        e = self.energy_mj[i]
+        e1, e2 = float(e[self.side == 0].sum()), float(e[self.side == 1].sum())
+        total = e1 + e2
+        return None if total <= SPLIT_FLOOR_MJ else (e1 - e2) / total * 100.0
+
     def status_shares(self, i: int | None = None) -> dict[str, float]:
         """Fraction of pairs in each status at point ``i`` (default: the resonance, the
         harmonic-1 peak)."""
@@ -315,7 +333,8 @@ class CaseResult:
         j = self.h1_peak_index
         if j < 0:
             keys = ("amplitude_mm", "peak_frequency_hz", "max_abs_mm", "mean_mm")
-            keys += ("friction_energy_mj", "friction_energy_note", "peak_stability")
+            keys += ("friction_energy_mj", "friction_energy_note", "friction_energy_split_pct")
+            keys += ("peak_stability",)
             return {f"h1_{k}": None for k in keys}
         e = self._energy_at(j)
         return {
@@ -325,6 +344,7 @@ class CaseResult:
             "h1_mean_mm": float(self.mean_mm[j]),
             "h1_friction_energy_mj": e["friction_energy_mj"],
             "h1_friction_energy_note": e["friction_energy_note"],
+            "h1_friction_energy_split_pct": self.energy_split_pct(j),
             "h1_peak_stability": self.branch.stability_name(j),
         }
 

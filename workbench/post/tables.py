@@ -35,6 +35,7 @@ __all__ = [
     "base_variant",
     "case_label",
     "curve_set",
+    "energy_split_table",
     "energy_table",
     "families",
     "pick_forces",
@@ -435,6 +436,29 @@ def energy_table(results: StudyResults, phase_deg: float, variant: str | None = 
         "damper: friction energy per cycle (mJ) at force",
         lambda c: _at_peak(c)[2],
         lambda v: energy_text(v, floor),
+        variant,
+    )
+
+
+def energy_split_table(
+    results: StudyResults, phase_deg: float, variant: str | None = None
+) -> Table:
+    """The friction energy's split between the two platforms' lines at resonance:
+    dampers x forces, platform 1's minus platform 2's in percent of the two
+    (:meth:`CaseResult.energy_split_pct`); :data:`STUCK_TEXT` where the contact does not
+    slip (at or below the energy table's floor)."""
+    cases = [c for c in results.select(phase_deg=phase_deg, variant=variant)]
+    floor = energy_floor([_at_peak(c)[2] for c in cases])
+
+    def split(c: CaseResult) -> float | None:
+        return None if _at_peak(c)[2] <= floor else c.energy_split_pct()
+
+    return _force_table(
+        results,
+        phase_deg,
+        "damper: energy on platform 1's line minus platform 2's (% of both) at force",
+        split,
+        lambda v: STUCK_TEXT if v is None else f"{v:+.1f}",
         variant,
     )
 
