@@ -41,6 +41,30 @@ def test_rigid_penalty_annihilates_rigid_motions_only():
     assert v @ P @ v > 0  # a deformation costs energy
 
 
+@pytest.mark.parametrize("k", [2, 3, 5])
+def test_a_pad_on_one_line_ties_all_but_its_five_rigid_motions(k):
+    """Nodes on one line (a two-node pad, or a coarse pad whose nodes lie on the contact
+    line) have five rigid motions: the rotation about the line moves none of them. The
+    penalty annihilates every rigid motion, rotation about the line included, penalises
+    the other 3 k - 5 directions (a stretch along the line among them), and ties a pad
+    and its mirror image alike (a plain QR of the rank-deficient basis tied two-node pads
+    not at all and mirror images differently)."""
+    x = np.linspace(0.0, 1e-3 * (k - 1), k) + 0.3e-3 * np.arange(k) ** 2  # uneven spacing
+    d = np.array([0.6, -0.3, 0.74])
+    d /= np.linalg.norm(d)
+    r = np.outer(x - x.mean(), d)
+    P = rigid_penalty(r)
+    assert np.linalg.matrix_rank(P, 1e-9) == 3 * k - 5
+    for t, th in ((np.array([1.0, -2.0, 0.5]), np.array([0.3, 0.1, -0.2])), (np.zeros(3), d)):
+        u = _rigid(r, t, th)
+        assert np.abs(P @ u).max() < 1e-9 * max(np.abs(u).max(), 1e-3)
+    stretch = np.concatenate([xi * d for xi in x - x.mean()])
+    assert stretch @ P @ stretch > 0.5 * stretch @ stretch  # a deformation costs energy
+    mirror = np.kron(np.eye(k), np.diag([-1.0, 1.0, 1.0]))
+    Pm = rigid_penalty(r * np.array([-1.0, 1.0, 1.0]))
+    assert np.abs(Pm - mirror @ P @ mirror).max() < 1e-9
+
+
 def test_line_pad_members():
     """Nodes on a grid around three points on a line along x, spacing 2 mm, normal z."""
     g = np.arange(-5, 5.01, 0.5) * 1e-3

@@ -94,17 +94,28 @@ def _line_direction(points: np.ndarray, frames: np.ndarray, i: int) -> np.ndarra
 
 
 def rigid_penalty(r: np.ndarray) -> np.ndarray:
-    """(3k, 3k) ``I - R (R^T R)^-1 R^T``: the part of the k nodes' displacements that is not a
+    """(3k, 3k) ``I - R (R^T R)^+ R^T``: the part of the k nodes' displacements that is not a
     rigid motion of them (``r`` (k, 3): positions about any point). A pad tied with it moves
     as a rigid body, free to translate and rotate, so it adds no stiffness to a body's own
-    rigid motions."""
+    rigid motions.
+
+    Nodes on one line (two nodes, or a pad at a coarse contact size whose nodes all lie
+    on the contact line) do not feel the rotation about that line: their rigid motions
+    span five directions, not six. The basis of the rigid motions is therefore the range
+    of ``R`` as its singular values reveal it (relative tolerance ``1e-9``); a plain QR
+    of the rank-deficient ``R`` added an arbitrary sixth direction, set by round-off,
+    which left two-node pads untied and made mirror-image pads tie differently."""
     k = len(r)
     R = np.zeros((3 * k, 6))
     for j, (x, y, z) in enumerate(r):
         R[3 * j : 3 * j + 3, :3] = np.eye(3)
         # u = theta x r
         R[3 * j : 3 * j + 3, 3:] = [[0.0, z, -y], [-z, 0.0, x], [y, -x, 0.0]]
-    Q, _ = np.linalg.qr(R)
+    # rotations in metres-scaled columns: scale them to the translations' before the rank
+    scale = max(float(np.abs(r).max()), 1e-300)
+    R[:, 3:] /= scale
+    U, sv, _ = np.linalg.svd(R, full_matrices=False)
+    Q = U[:, : int(np.sum(sv > 1e-9 * sv[0]))]
     return np.eye(3 * k) - Q @ Q.T
 
 
