@@ -156,6 +156,36 @@ def test_the_case_key_covers_every_source_that_shapes_a_curve(monkeypatch):
     assert not want - read, sorted(str(p.relative_to(pkg)) for p in want - read)
 
 
+def test_the_case_key_covers_the_mesher_and_the_reduction(monkeypatch):
+    """The sources that make a case's model (the mesher's, the reduction's, the pads')
+    are read into its model key and so into its cache key: a change to them recomputes
+    the cases, not only the meshes and reduced models."""
+    import workbench.io as wio
+    import workbench.studies.engine.plan as plan_mod
+    from workbench.studies.engine.plan import make_case, model_code_version
+
+    read = set()
+    real = wio.file_digest
+
+    def spy(path, n=16):
+        read.add(Path(path).resolve())
+        return real(path, n)
+
+    monkeypatch.setattr(wio, "file_digest", spy)
+    model_code_version()
+    pkg = Path(wio.__file__).resolve().parents[1]
+    for f in ("geometry/occ.py", "geometry/mirror.py", "geometry/shapes/cone.py",
+              "fe/pads.py", "fe/craig_bampton.py", "fe/reduce.py"):  # fmt: skip
+        assert pkg / f in read, f
+    from workbench.studies.engine.spec import load_study
+
+    settings = load_study(None, {}).as_dict()
+    before = make_case("cone", 0.0, 30.0, settings)
+    monkeypatch.setattr(plan_mod, "_MODEL_CODE", lambda: "another model code")
+    after = make_case("cone", 0.0, 30.0, settings)
+    assert after.model_digest != before.model_digest and after.digest != before.digest
+
+
 def test_code_version_counts_sub_packages(tmp_path):
     from workbench.io import code_version
 

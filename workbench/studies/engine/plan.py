@@ -118,7 +118,7 @@ def make_case(
     damper: str, phase: float, force: float, settings: dict[str, Any], variant: str = ""
 ) -> Case:
     c = Case(damper, float(phase), float(force), dict(settings), variant)
-    md = digest(c.model_params())
+    md = digest({"params": c.model_params(), "code": _MODEL_CODE()})
     return dataclasses.replace(
         c,
         model_digest=md,
@@ -129,6 +129,27 @@ def make_case(
 @functools.lru_cache(maxsize=1)
 def _SOLVER_CODE() -> str:  # noqa: N802 - a constant computed once per process
     return solver_code_version()
+
+
+@functools.lru_cache(maxsize=1)
+def _MODEL_CODE() -> str:  # noqa: N802 - a constant computed once per process
+    return model_code_version()
+
+
+def model_code_version() -> str:
+    """A hash of the sources that make a case's model: the mesher's
+    (``workbench.geometry.build.code_version``) and the reduction's
+    (``workbench.fe.reduce.code_version``).
+
+    Part of every case's model key, so of its cache key: the meshes and reduced models
+    have their own keys and are made again when these change, and a curve computed on the
+    old model must not be reused with them (round 17 mended the pads' tie in
+    ``fe/pads.py``; the cached curves of the old tie were read back until this was in the
+    key)."""
+    from ...fe.reduce import code_version as fe_code
+    from ...geometry.build import code_version as geometry_code
+
+    return digest([geometry_code(), fe_code()], 12)
 
 
 def plan(spec: StudySpec) -> list[Case]:
