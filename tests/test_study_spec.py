@@ -177,6 +177,14 @@ def test_the_case_key_covers_the_mesher_and_the_reduction(monkeypatch):
     for f in ("geometry/occ.py", "geometry/mirror.py", "geometry/shapes/cone.py",
               "fe/pads.py", "fe/craig_bampton.py", "fe/reduce.py"):  # fmt: skip
         assert pkg / f in read, f
+    # a bladed-disk case's key: its sector's digest has the mesher's; the FE package's
+    # sources (the cyclic reduction, the pads) and the solver's come in here
+    from workbench.studies.engine.plan import disk_code_version
+
+    read.clear()
+    disk_code_version()
+    for f in ("fe/cyclic.py", "fe/cyclic_cb.py", "fe/pads.py", "hbm/core/fourier.py"):
+        assert pkg / f in read, f
     from workbench.studies.engine.spec import load_study
 
     settings = load_study(None, {}).as_dict()

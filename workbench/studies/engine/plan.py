@@ -136,6 +136,17 @@ def _MODEL_CODE() -> str:  # noqa: N802 - a constant computed once per process
     return model_code_version()
 
 
+def disk_code_version() -> str:
+    """The sources a bladed-disk case's curve depends on beyond its sector's mesh (whose
+    digest has the mesher's): the solver's (:func:`solver_code_version`) and the whole FE
+    package (the cyclic reduction, the damper's reduction, the pads), so that a change to
+    either recomputes the cases and not only the models."""
+    from ...io import code_version
+
+    root = Path(__file__).resolve().parents[2]  # workbench/
+    return digest([solver_code_version(), code_version(root / "fe")], 12)
+
+
 def model_code_version() -> str:
     """A hash of the sources that make a case's model: the mesher's
     (``workbench.geometry.build.code_version``) and the reduction's

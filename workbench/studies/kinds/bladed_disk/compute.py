@@ -13,7 +13,8 @@ frequency and the friction energy per sector and cycle there.
 Each case is kept in ``out/cache/bladed_disk/<digest>.json``; the digest
 covers the disk sector's own digest (geometry, mesh, N), the contact
 parameters, the reduction's sizes, the EO, the force, the harmonics and the
-solver sources (:func:`workbench.studies.engine.plan.solver_code_version`), so a
+solver's and the FE package's sources
+(:func:`workbench.studies.engine.plan.disk_code_version`), so a
 study killed part way resumes where it stopped and a second run reuses every
 case; ``force`` recomputes. The cases are handed to whichever MPI rank is free
 (:func:`workbench.studies.engine.schedule.run_tasks`).
@@ -36,7 +37,7 @@ import numpy as np
 
 from ....errors import InputError
 from ....io import digest, write_json
-from ...engine.plan import solver_code_version
+from ...engine.plan import disk_code_version
 from ...engine.schedule import run_tasks, study_comm
 from ...engine.spec import StudySpec
 from .outputs import eo_nd, write_outputs
@@ -126,7 +127,7 @@ def case_key(rec, cp, spec: StudySpec, eo: int, force_n: float) -> str:
             "max_points": int(spec.max_points),
             "eo": int(eo),
             "force_n": float(force_n),
-            "code": solver_code_version(),
+            "code": disk_code_version(),
             "record": RECORD_VERSION,
             "dc_weight": DC_WEIGHT,
         }

@@ -39,7 +39,7 @@ def post_key(case_key_worst: str, sector_digest: str, cp, spec, zeta: float, rec
     """The cache key of one damper's screen and worst-peak field (``zeta``, ``record``: the
     cases' damping ratio and record version)."""
     from ....io import code_version
-    from ...engine.plan import solver_code_version
+    from ...engine.plan import disk_code_version
 
     return digest(
         {
@@ -51,7 +51,7 @@ def post_key(case_key_worst: str, sector_digest: str, cp, spec, zeta: float, rec
             "zeta": float(zeta),
             "harmonics": [int(h) for h in spec.harmonics],
             "worst": case_key_worst,
-            "code": solver_code_version(),
+            "code": disk_code_version(),
             "post_code": code_version(Path(__file__).parent, ("post.py",)),
             "record": int(record),
         }
