@@ -129,14 +129,11 @@ def test_shipped_study_files_load_and_every_case_fits_the_groove(path):
         make_layout(gp)
 
 
-def test_the_case_key_covers_every_source_that_shapes_a_curve(monkeypatch):
-    """Every source file of the contact laws (a sub-package), the harmonic balance (but
-    the nonlinear modes), the branch's HDF5 writer, the assembly and the model pipeline
-    is read into a case's cache key: editing any of them recomputes the cases."""
+def _sources_read(monkeypatch) -> tuple[set, Path]:
+    """(the set every source file digested from now on is added to, the package folder)."""
     import workbench.io as wio
-    from workbench.studies.engine.plan import NLMODE_PACKAGE, solver_code_version
 
-    read = set()
+    read: set = set()
     real = wio.file_digest
 
     def spy(path, n=16):
@@ -144,8 +141,17 @@ def test_the_case_key_covers_every_source_that_shapes_a_curve(monkeypatch):
         return real(path, n)
 
     monkeypatch.setattr(wio, "file_digest", spy)
+    return read, Path(wio.__file__).resolve().parents[1]
+
+
+def test_the_case_key_covers_every_source_that_shapes_a_curve(monkeypatch):
+    """Every source file of the contact laws (a sub-package), the harmonic balance (but
+    the nonlinear modes), the branch's HDF5 writer, the assembly and the model pipeline
+    is read into a case's cache key: editing any of them recomputes the cases."""
+    from workbench.studies.engine.plan import NLMODE_PACKAGE, solver_code_version
+
+    read, pkg = _sources_read(monkeypatch)
     solver_code_version()
-    pkg = Path(wio.__file__).resolve().parents[1]
     want = {pkg / "io" / "record.py"} | {
         p.resolve()
         for d in ("contact", "hbm", "assembly", "pipeline")
@@ -160,20 +166,11 @@ def test_the_case_key_covers_the_mesher_and_the_reduction(monkeypatch):
     """The sources that make a case's model (the mesher's, the reduction's, the pads')
     are read into its model key and so into its cache key: a change to them recomputes
     the cases, not only the meshes and reduced models."""
-    import workbench.io as wio
     import workbench.studies.engine.plan as plan_mod
     from workbench.studies.engine.plan import make_case, model_code_version
 
-    read = set()
-    real = wio.file_digest
-
-    def spy(path, n=16):
-        read.add(Path(path).resolve())
-        return real(path, n)
-
-    monkeypatch.setattr(wio, "file_digest", spy)
+    read, pkg = _sources_read(monkeypatch)
     model_code_version()
-    pkg = Path(wio.__file__).resolve().parents[1]
     for f in ("geometry/occ.py", "geometry/mirror.py", "geometry/shapes/cone.py",
               "fe/pads.py", "fe/craig_bampton.py", "fe/reduce.py"):  # fmt: skip
         assert pkg / f in read, f
