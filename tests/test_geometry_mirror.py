@@ -133,5 +133,12 @@ def test_on_mirror_meshes_the_cone_in_phase_splits_its_energy_evenly(tmp_path):
         assert r.code == 0, r
         (case,) = StudyResults.load(tmp_path / name / "results.h5").cases
         split[name] = case.energy_split_pct()
+        # the record (and so the report's inputs) says which mesh it was, and from where
+        rec = case.inputs["mirror_meshes"]
+        assert rec["value"] is (name == "mirror")
+        assert rec["source"].endswith("[rig.mesh]")
+        assert ("mirror.toml" in rec["source"]) is (name == "mirror")
+        assert case.inputs["contact_pads"]["value"] == 0.0
+        assert case.inputs["contact_mesh_size"]["value"] == 4.0
     assert abs(split["mirror"]) < 1e-3
     assert abs(split["whole"]) > 1.0

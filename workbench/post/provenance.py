@@ -251,6 +251,30 @@ def solve_inputs(prep: Any, settings: Mapping[str, Any], branch: Any, options: A
         "mesh size (quadratic tetrahedra)",
         "model",
     )
+    gm = geom.params["rig"]["mesh"]
+    out["contact_mesh_size"] = _e(
+        float(gm["contact_size_mm"]),
+        "mm",
+        "option"
+        if settings.get("contact-mesh-size") is not None
+        else _file_of(settings, damper, ("rig", "mesh"), "contact_size_mm"),
+        "element size at the contact points (capped by their spacing and the mesh size)",
+        "model",
+    )
+    out["contact_pads"] = _e(
+        float(gm.get("pad_mm", 0.0)),
+        "mm",
+        _file_of(settings, damper, ("rig", "mesh"), "pad_mm"),
+        "width of the rigid pad tied to each contact point (0: the node alone)",
+        "model",
+    )
+    out["mirror_meshes"] = _e(
+        bool(gm.get("mirror", False)),
+        "1",
+        _file_of(settings, damper, ("rig", "mesh"), "mirror"),
+        "half of each body meshed and mirrored (mirror-image meshes of the two sides)",
+        "model",
+    )
     for key, value in (geom.params.get(damper) or {}).items():
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             continue
