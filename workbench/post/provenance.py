@@ -241,40 +241,22 @@ def solve_inputs(prep: Any, settings: Mapping[str, Any], branch: Any, options: A
         "parameter files of the rig and the damper (later files win)",
         "model",
     )
-    mesh = float(geom.params["rig"]["mesh"]["size_mm"])
-    out["mesh_size"] = _e(
-        mesh,
-        "mm",
-        "option"
-        if settings.get("mesh-size") is not None
-        else _file_of(settings, damper, ("rig", "mesh"), "size_mm"),
-        "mesh size (quadratic tetrahedra)",
-        "model",
-    )
     gm = geom.params["rig"]["mesh"]
-    out["contact_mesh_size"] = _e(
-        float(gm["contact_size_mm"]),
-        "mm",
-        "option"
-        if settings.get("contact-mesh-size") is not None
-        else _file_of(settings, damper, ("rig", "mesh"), "contact_size_mm"),
-        "element size at the contact points (capped by their spacing and the mesh size)",
-        "model",
-    )
-    out["contact_pads"] = _e(
-        float(gm.get("pad_mm", 0.0)),
-        "mm",
-        _file_of(settings, damper, ("rig", "mesh"), "pad_mm"),
-        "width of the rigid pad tied to each contact point (0: the node alone)",
-        "model",
-    )
-    out["mirror_meshes"] = _e(
-        bool(gm.get("mirror", False)),
-        "1",
-        _file_of(settings, damper, ("rig", "mesh"), "mirror"),
-        "half of each body meshed and mirrored (mirror-image meshes of the two sides)",
-        "model",
-    )
+    # [rig.mesh] entries: value, unit, the study option that can set it, label
+    for name, field, value, unit, option, label in (
+        ("mesh_size", "size_mm", float(gm["size_mm"]), "mm", "mesh-size",
+         "mesh size (quadratic tetrahedra)"),
+        ("contact_mesh_size", "contact_size_mm", float(gm["contact_size_mm"]), "mm",
+         "contact-mesh-size",
+         "element size at the contact points (capped by their spacing and the mesh size)"),
+        ("contact_pads", "pad_mm", float(gm.get("pad_mm", 0.0)), "mm", None,
+         "width of the rigid pad tied to each contact point (0: the node alone)"),
+        ("mirror_meshes", "mirror", bool(gm.get("mirror", False)), "1", None,
+         "half of each body meshed and mirrored (mirror-image meshes of the two sides)"),
+    ):  # fmt: skip
+        set_by_option = option is not None and settings.get(option) is not None
+        source = "option" if set_by_option else _file_of(settings, damper, ("rig", "mesh"), field)
+        out[name] = _e(value, unit, source, label, "model")
     for key, value in (geom.params.get(damper) or {}).items():
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             continue
