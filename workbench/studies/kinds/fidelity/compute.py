@@ -88,9 +88,7 @@ from .ladders import (
     _check_sampling,
     _settings_dict,
     base_values,
-    held_values,
     knob_applies,
-    knob_levels,
     ladder_pivot,
     plan_settings,
     propose_combination,
@@ -297,6 +295,21 @@ def _knob_limits(
     return out
 
 
+def _held(ladders: dict[str, list[Setting]], base: Setting) -> dict[str, dict[str, str]]:
+    """knob -> the label of each other knob its ladder holds away from the base
+    (``held_values``), read off the ladder's pivot: where it differs from the base."""
+    out: dict[str, dict[str, str]] = {}
+    for k, lad in ladders.items():
+        piv = ladder_pivot(k, lad, base)
+        diff = {} if piv is None else {
+            kk: level_label(kk, vv) for kk, vv in piv.values.items()
+            if kk != k and vv != base.values[kk]
+        }  # fmt: skip
+        if diff:
+            out[k] = diff
+    return out
+
+
 def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> dict[str, Any]:
     """Run a fidelity study into ``out`` (resuming); return the JSON summary."""
     from ....log import mpi_size
@@ -388,12 +401,7 @@ def run_fidelity(spec: StudySpec, out: str | Path, *, force: bool = False) -> di
             )
         },
         "knob_limits": _knob_limits(limits, ladders, settings[0]),
-        "held": {
-            k: {kk: level_label(kk, vv) for kk, vv in held.items()}
-            for k, held in held_values(
-                spec, comp.dampers, comp.base_values, knob_levels(spec)
-            ).items()
-        },
+        "held": _held(ladders, settings[0]),
         "limit": combined,
         "base": {k: level_label(k, v) for k, v in settings[0].values.items()},
         "reference": {k: level_label(k, v) for k, v in ref.values.items()},
