@@ -54,7 +54,7 @@ from typing import Any
 import numpy as np
 
 from ....io import code_version, digest, write_json
-from ...engine.plan import solver_code_version
+from ...engine.plan import disk_code_version
 from ...engine.schedule import run_tasks, schedule_efficiency, study_comm
 from ...engine.spec import StudySpec
 from ..bladed_disk.compute import disk_sectors, study_eos
@@ -71,15 +71,9 @@ N_FREQ = 100  # frequencies of a linear scan (and the natural ones) before the p
 
 
 def _code() -> str:
-    root = Path(__file__).resolve().parents[3]  # workbench/
-    return digest(
-        [
-            solver_code_version(),
-            code_version(root / "fe"),
-            code_version(Path(__file__).parent, ("compute.py",)),
-        ],
-        12,
-    )
+    """The sources a task's result depends on: the bladed disk's (the solver and the FE
+    package, :func:`disk_code_version`) and this module."""
+    return digest([disk_code_version(), code_version(Path(__file__).parent, ("compute.py",))], 12)
 
 
 def task_key(rec, cp, spec: StudySpec, eo: int, delta: np.ndarray, config, code: str) -> str:
