@@ -296,7 +296,7 @@ def data_range(
     if not _turns(d):
         return None  # monotone (or fewer than two steps): a fit or nothing, never this bound
     hm = np.sqrt(hh[1:] * hh[:-1])[nz]
-    p_star = float(np.polyfit(np.log(hm), np.log(np.abs(d[nz])), 1)[0])
+    p_star = float(np.polyfit(np.log(hm), np.log(np.abs(dn)), 1)[0])
     if not p_star > 0.0:
         return None  # the oscillation grows as the levels get finer: nothing bounds it
     if abs(dn[0]) > abs(dn[1]):
