@@ -83,6 +83,11 @@ def case_rows(out: Path, variant: str) -> list[dict]:
     spec = _spec(out, variant)
     comp = _Computer(spec, out / variant, False)
     settings, _ = plan_settings(spec, comp.dampers)
+    if comp.todo(settings):  # not run, or run by code whose case keys differ from this one's
+        raise SystemExit(
+            f"{out / variant} has no complete run for this code: run "
+            "benchmarks/mirror_fidelity.py without --report (it reuses what still matches)"
+        )
     rows = []
     for st in settings:
         comp.load(st)
