@@ -10,7 +10,7 @@ the cone's in-phase split between the lines reaches 40 % of the total (rms 14 % 
 study's 23 settings at 30 N), and the two settings whose split exceeds 30 % are the
 points ladder's outliers. This script runs the same study, restricted to the cone (in
 and out of phase, 9.6 and 30 N; knobs mesh size, contact mesh size, points per line),
-twice: on whole meshes (the pad rig's file as it is) and with `[rig.mesh] mirror = true`
+twice: on whole meshes (`[rig.mesh] mirror = false`) and with `[rig.mesh] mirror = true`
 (the half x >= 0 of each body meshed and mirrored: `workbench/geometry/mirror.py`). It
 prints per setting and case the energy split, the energy, the harmonic-1 peak and its
 frequency on both, then each knob's limit as the package reads it (mirror | whole).
@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -47,22 +48,23 @@ OPTIONS = {
     "knobs": ["mesh-size", "contact-mesh-size", "points-per-line"],
     "production-geometry": None,
 }
-VARIANTS = ("mirror", "whole")  # [rig.mesh] mirror = true / the pad rig's file as it is
+VARIANTS = ("mirror", "whole")  # [rig.mesh] mirror = true / false
 QS = ("friction_energy_mj", "peak_amplitude_mm", "peak_frequency_hz")
 
 
 def geometry_file(out: Path, variant: str) -> Path:
-    """The pad rig's geometry file, with ``[rig.mesh] mirror = true`` for "mirror" (written
-    into ``out``)."""
-    if variant == "whole":
-        return PADS
+    """The pad rig's geometry file with ``[rig.mesh] mirror`` set for the variant (true for
+    "mirror", false for "whole"; the file itself sets true since round 18), written into
+    ``out``."""
     text = PADS.read_text()
     if "\n[rig.mesh]\n" not in text:
-        raise SystemExit(f"{PADS} has no [rig.mesh] table to add mirror = true to")
-    text = text.replace("\n[rig.mesh]\n", "\n[rig.mesh]\nmirror = true\n", 1)
-    path = out / "paper_rig_pads_mirror.toml"
+        raise SystemExit(f"{PADS} has no [rig.mesh] table to set mirror in")
+    text = re.sub(r"(?m)^mirror\s*=.*\n", "", text)
+    flag = "true" if variant == "mirror" else "false"
+    text = text.replace("\n[rig.mesh]\n", f"\n[rig.mesh]\nmirror = {flag}\n", 1)
+    path = out / f"paper_rig_pads_{variant}.toml"
     path.parent.mkdir(parents=True, exist_ok=True)
-    head = f"# {PADS.name} with mirror-image meshes (benchmarks/mirror_fidelity.py)\n"
+    head = f"# {PADS.name} with mirror = {flag} (benchmarks/mirror_fidelity.py)\n"
     path.write_text(head + text)
     return path
 
