@@ -288,7 +288,12 @@ def test_reduced_sector_with_stuck_damper_matches_the_cyclic_modes(clamped):
         f = to_hz(sl.eigh(K, M, eigvals_only=True, subset_by_index=[0, 5]))
         f = f[0::2] if k == 1 else f[:3]
         rel = (f - exact) / exact
-        assert rel.min() > -1e-9 and rel.max() < 3e-4, (k, rel)
+        # "from above" to round-off: on this coarse mesh (the cylinder's half meshed and
+        # mirrored, one tetrahedron of quality 0.08) SLEPc and a dense solver give the
+        # unreduced frequencies only to 4e-8 of each other, and 80 modes put the first
+        # ND 3 frequency 1.4e-7 above the exact one where 40 put it 8.5e-8 above (the
+        # reduced value moves by round-off, not truncation): 1e-9 held on whole meshes
+        assert rel.min() > -1e-7 and rel.max() < 3e-4, (k, rel)
 
 
 def test_pads_on_the_disk_stiffen_every_nodal_diameter_and_keep_the_full_disk_check(tmp_path):

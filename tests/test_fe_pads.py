@@ -155,7 +155,7 @@ def test_pad_variant_of_the_paper_rig_keeps_in_step():
     root = Path(__file__).resolve().parents[1] / "geometry"
     base = tomllib.loads((root / "paper_rig.toml").read_text())
     pads = tomllib.loads((root / "paper_rig_pads.toml").read_text())
-    assert pads["rig"].pop("mesh") == {"pad_mm": 2.0}
+    assert pads["rig"].pop("mesh") == {"pad_mm": 2.0, **base["rig"].pop("mesh")}
     cb, cp = base.pop("contact"), pads.pop("contact")
     assert pads == base
     for key, scale in (("kt_line_n_per_m2", 0.4509), ("kn_line_n_per_m2", 0.4509),
