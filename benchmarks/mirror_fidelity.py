@@ -27,7 +27,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import sys
 import time
 from pathlib import Path
@@ -38,6 +37,7 @@ os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 STUDY = ROOT / "studies" / "fidelity_paper_rig_pads.toml"
 PADS = ROOT / "geometry" / "paper_rig_pads.toml"
@@ -54,19 +54,12 @@ QS = ("friction_energy_mj", "peak_amplitude_mm", "peak_frequency_hz")
 
 def geometry_file(out: Path, variant: str) -> Path:
     """The pad rig's geometry file with ``[rig.mesh] mirror`` set for the variant (true for
-    "mirror", false for "whole"; the file itself sets true since round 18), written into
-    ``out``."""
-    text = PADS.read_text()
-    if "\n[rig.mesh]\n" not in text:
-        raise SystemExit(f"{PADS} has no [rig.mesh] table to set mirror in")
-    text = re.sub(r"(?m)^mirror\s*=.*\n", "", text)
-    flag = "true" if variant == "mirror" else "false"
-    text = text.replace("\n[rig.mesh]\n", f"\n[rig.mesh]\nmirror = {flag}\n", 1)
-    path = out / f"paper_rig_pads_{variant}.toml"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    head = f"# {PADS.name} with mirror = {flag} (benchmarks/mirror_fidelity.py)\n"
-    path.write_text(head + text)
-    return path
+    "mirror", false for "whole"), written into ``out``."""
+    from geometry_variant import with_mirror
+
+    return with_mirror(
+        PADS, variant == "mirror", out / f"paper_rig_pads_{variant}.toml", "mirror_fidelity.py"
+    )
 
 
 def _spec(out: Path, variant: str):

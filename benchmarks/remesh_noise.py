@@ -44,6 +44,7 @@ os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 OUT = ROOT / "results" / "remesh_noise"
 STUDY = ROOT / "studies" / "paper_rig.toml"
@@ -57,11 +58,11 @@ QS = (
 
 
 def _geometry(variant: str, scratch: Path) -> Path:
-    if variant == "whole":
-        return GEOMETRY
-    path = scratch / "paper_rig_mirror.toml"
-    path.write_text(GEOMETRY.read_text() + "\n[rig.mesh]\nmirror = true\n")
-    return path
+    from geometry_variant import with_mirror
+
+    return with_mirror(
+        GEOMETRY, variant == "mirror", scratch / f"paper_rig_{variant}.toml", "remesh_noise.py"
+    )
 
 
 @contextlib.contextmanager

@@ -1,0 +1,152 @@
+"""Which harmonic set puts the main job within 2 % of the converged answer, and at what cost?
+(issue 31, item 2: the friction energy at the default setting within 2 % of the extrapolated
+limit, or the cheapest setting that is, made the default if it costs less than twice today's.)
+
+Runs the whole main job (`upd study studies/paper_rig.toml` under `mpirun -n 2`: 42 curves,
+their stability and the six nonlinear modes) once per harmonic set, each cold in a fresh
+folder (meshes and reductions included, as `make run` does), and times it with the load
+average before. Then reads each run's twelve fidelity cases (the six families at 9.6 and
+30 N) as the fidelity studies read them (`CaseResult.refined_peak`: the peak between the
+computed points) and sets them against the all-knob limits of the pad study
+(`results/fid_paper_rig_pads/tables/fidelity_base_vs_limit.json`, `upd study
+studies/fidelity_paper_rig_pads.toml`): the signed error of every number +- the limit's
+uncertainty, "n.t." where the limit is not trusted. The other knobs stay at the main job's
+setting, so a set's error is the main job's error with that set.
+
+    python benchmarks/main_job_settings.py                      # 0-3, 0-4, 0-5 (about 16 min)
+    python benchmarks/main_job_settings.py --harmonics 0-3,0-5  # a choice
+    python benchmarks/main_job_settings.py --report             # the table from the runs
+
+Runs go to results/main_job_settings/h<set>/ (kept: --report reads them; a run whose
+folder exists is not repeated unless --force). Prints, per set: wall time, its ratio to
+0-3, the load before, then per case the energy, peak and frequency errors, and the worst
+energy error; writes results/main_job_settings/summary.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+for _k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+    os.environ.setdefault(_k, "1")
+os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+OUT = ROOT / "results" / "main_job_settings"
+STUDY = ROOT / "studies" / "paper_rig.toml"
+LIMITS = ROOT / "results" / "fid_paper_rig_pads" / "tables" / "fidelity_base_vs_limit.json"
+QS = (
+    ("friction_energy_mj", "energy"),
+    ("peak_amplitude_mm", "peak max|x|"),
+    ("peak_frequency_hz", "frequency"),
+)
+
+
+def harmonic_list(label: str) -> list[int]:
+    """ "0-4" -> [0, 1, 2, 3, 4]."""
+    lo, hi = (int(x) for x in label.split("-"))
+    return list(range(lo, hi + 1))
+
+
+def run(label: str, force: bool) -> dict:
+    """The main job with harmonics ``label``, cold, on 2 ranks: wall time and load before."""
+    out = OUT / f"h{label}"
+    rec = out / "timing.json"
+    if rec.is_file() and not force:
+        return json.loads(rec.read_text())
+    if out.exists():
+        shutil.rmtree(out)
+    out.mkdir(parents=True)
+    load = os.getloadavg()
+    cmd = ["mpirun", "-n", "2", "--allow-run-as-root", "--oversubscribe",
+           str(ROOT / ".venv" / "bin" / "upd"), "study", str(STUDY),
+           "--harmonics", ",".join(map(str, harmonic_list(label))), "--out", str(out)]  # fmt: skip
+    print(f"harmonics {label}: {' '.join(cmd[5:])}", flush=True)
+    t0 = time.perf_counter()
+    with open(out / "run.log", "w") as log:
+        code = subprocess.call(cmd, stdout=log, stderr=subprocess.STDOUT, cwd=ROOT)
+    wall = time.perf_counter() - t0
+    r = {"harmonics": label, "wall_s": wall, "load_before": load, "exit": code}
+    rec.write_text(json.dumps(r, indent=1))
+    print(f"  {wall:.0f} s wall, exit {code}, load before {load[0]:.2f}", flush=True)
+    return r
+
+
+def values(label: str) -> dict[str, dict[str, float | None]]:
+    """Per fidelity condition ("cone 0 deg 30 N"), the refined peak quantities."""
+    from workbench.post.fidelity import zeroed
+    from workbench.post.results import StudyResults
+
+    res = StudyResults.load(OUT / f"h{label}" / "results.h5")
+    out = {}
+    for c in res.cases:
+        key = f"{c.damper} {c.phase_deg:g} deg {c.force_n:g} N"
+        pk = c.refined_peak()
+        out[key] = {q: None if pk.get(q) is None else zeroed(q, float(pk[q])) for q, _ in QS}
+    return out
+
+
+def report(labels: list[str]) -> dict:
+    if not LIMITS.is_file():
+        raise SystemExit(f"{LIMITS} is missing: run the pad study first (see the docstring)")
+    lim = json.loads(LIMITS.read_text())["cases"]
+    runs = {x: json.loads((OUT / f"h{x}" / "timing.json").read_text()) for x in labels}
+    base = runs.get("0-3", {}).get("wall_s")
+    summary: dict = {"limits": str(LIMITS.relative_to(ROOT)), "sets": {}}
+    for x in labels:
+        r = runs[x]
+        ratio = f", {r['wall_s'] / base:.2f} x 0-3" if base else ""
+        print(f"\nharmonics {x}: {r['wall_s']:.0f} s wall{ratio} (load before "
+              f"{r['load_before'][0]:.2f}, exit {r['exit']})")  # fmt: skip
+        vals = values(x)
+        rows, worst = [], None
+        for cond, qs in lim.items():
+            cells = []
+            for q, name in QS:
+                e = qs[q]
+                v = vals.get(cond, {}).get(q)
+                if v == 0.0 and q == "friction_energy_mj":
+                    cells.append(f"{name} 0 (stuck)")
+                    continue
+                if v is None or e.get("limit") is None or not e.get("trusted"):
+                    cells.append(f"{name} {v if v is None else f'{v:.4g}'}: n.t.")
+                    continue
+                err = 100.0 * (v / e["limit"] - 1.0)
+                u = e["uncertainty_pct"]
+                rows.append({"case": cond, "quantity": q, "value": v, "error_pct": err,
+                             "uncertainty_pct": u})  # fmt: skip
+                cells.append(f"{name} {v:.4g}: {err:+.2f} +- {u:.2g} %")
+                if q == "friction_energy_mj" and (worst is None or abs(err) > abs(worst[1])):
+                    worst = (cond, err, u)
+            print(f"  {cond:22s} " + " | ".join(cells))
+        if worst:
+            print(f"  worst trusted energy error: {worst[0]}, {worst[1]:+.2f} +- {worst[2]:.2g} %")
+        summary["sets"][x] = {"timing": r, "rows": rows, "worst_energy": worst}
+    (OUT / "summary.json").write_text(json.dumps(summary, indent=1))
+    return summary
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--harmonics", default="0-3,0-4,0-5", help="sets, e.g. 0-3,0-4,0-5")
+    ap.add_argument("--report", action="store_true", help="only the table from the runs")
+    ap.add_argument("--force", action="store_true", help="run again where a run exists")
+    a = ap.parse_args()
+    labels = a.harmonics.split(",")
+    if not a.report:
+        for x in labels:
+            run(x, a.force)
+    report(labels)
+
+
+if __name__ == "__main__":
+    main()
