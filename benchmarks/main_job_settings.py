@@ -15,6 +15,7 @@ setting, so a set's error is the main job's error with that set.
 
     python benchmarks/main_job_settings.py                      # 0-3, 0-4, 0-5 (about 16 min)
     python benchmarks/main_job_settings.py --harmonics 0-3,0-5  # a choice
+    python benchmarks/main_job_settings.py --harmonics 0-5@64   # 0-5 at nt 64 (default 128)
     python benchmarks/main_job_settings.py --report             # the table from the runs
 
 Runs go to results/main_job_settings/h<set>/ (kept: --report reads them; a run whose
@@ -52,9 +53,14 @@ QS = (
 
 
 def harmonic_list(label: str) -> list[int]:
-    """ "0-4" -> [0, 1, 2, 3, 4]."""
-    lo, hi = (int(x) for x in label.split("-"))
+    """The set "0-4" is [0, 1, 2, 3, 4] ("0-5@64": the harmonics of "0-5")."""
+    lo, hi = (int(x) for x in label.split("@")[0].split("-"))
     return list(range(lo, hi + 1))
+
+
+def nt_option(label: str) -> list[str]:
+    """The set "0-5@64" runs at ``--nt 64``: samples per period other than the default."""
+    return ["--nt", label.split("@")[1]] if "@" in label else []
 
 
 def run(label: str, force: bool) -> dict:
@@ -69,7 +75,8 @@ def run(label: str, force: bool) -> dict:
     load = os.getloadavg()
     cmd = ["mpirun", "-n", "2", "--allow-run-as-root", "--oversubscribe",
            str(ROOT / ".venv" / "bin" / "upd"), "study", str(STUDY),
-           "--harmonics", ",".join(map(str, harmonic_list(label))), "--out", str(out)]  # fmt: skip
+           "--harmonics", ",".join(map(str, harmonic_list(label))), *nt_option(label),
+           "--out", str(out)]  # fmt: skip
     print(f"harmonics {label}: {' '.join(cmd[5:])}", flush=True)
     t0 = time.perf_counter()
     with open(out / "run.log", "w") as log:
@@ -137,7 +144,12 @@ def report(labels: list[str]) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--harmonics", default="0-3,0-4,0-5", help="sets, e.g. 0-3,0-4,0-5")
+    ap.add_argument(
+        "--harmonics",
+        default="0-3,0-4,0-5",
+        help="sets, e.g. 0-3,0-4,0-5; 0-5@64 runs 0-5 at 64 samples a period (the default: "
+        "16 per highest harmonic, a power of two)",
+    )
     ap.add_argument("--report", action="store_true", help="only the table from the runs")
     ap.add_argument("--force", action="store_true", help="run again where a run exists")
     a = ap.parse_args()
