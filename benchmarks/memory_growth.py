@@ -31,9 +31,17 @@ sys.path.insert(0, str(ROOT))
 OUT = ROOT / "results" / "memory_growth"
 
 
+TRIM = False
+
+
 def rss_gb() -> float:
-    """This process's resident set (GB) after a full garbage collection."""
+    """This process's resident set (GB) after a full garbage collection (and, with
+    ``--trim``, glibc's ``malloc_trim(0)``)."""
     gc.collect()
+    if TRIM:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
     with open("/proc/self/status") as f:
         for line in f:
             if line.startswith("VmRSS:"):
@@ -44,7 +52,15 @@ def rss_gb() -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--n", type=int, default=6, help="number of models (default 6)")
+    ap.add_argument(
+        "--trim",
+        action="store_true",
+        help="return the C heap's free memory to the system after each stage (glibc "
+        "malloc_trim): growth that this removes is fragmentation, not retention",
+    )
     a = ap.parse_args()
+    global TRIM
+    TRIM = a.trim
     from workbench.fe.reduce import reduce_body
     from workbench.geometry import build_geometry
 
