@@ -31,14 +31,11 @@ sys.path.insert(0, str(ROOT))
 OUT = ROOT / "results" / "memory_growth"
 
 
-TRIM = False
-
-
-def rss_gb() -> float:
+def rss_gb(trim: bool) -> float:
     """This process's resident set (GB) after a full garbage collection (and, with
-    ``--trim``, glibc's ``malloc_trim(0)``)."""
+    ``trim``, glibc's ``malloc_trim(0)``)."""
     gc.collect()
-    if TRIM:
+    if trim:
         import ctypes
 
         ctypes.CDLL("libc.so.6").malloc_trim(0)
@@ -59,8 +56,6 @@ def main() -> None:
         "malloc_trim): growth that this removes is fragmentation, not retention",
     )
     a = ap.parse_args()
-    global TRIM
-    TRIM = a.trim
     from workbench.fe.reduce import reduce_body
     from workbench.geometry import build_geometry
 
@@ -68,21 +63,21 @@ def main() -> None:
         shutil.rmtree(OUT)
     geometry = ROOT / "geometry" / "paper_rig.toml"
     coarse = {"rig": {"mesh": {"contact_size_mm": 3.0}}}
-    print(f"start: {rss_gb():.2f} GB", flush=True)
+    print(f"start: {rss_gb(a.trim):.2f} GB", flush=True)
     first = None
     for i in range(a.n):
         size = 14.0 - 0.5 * i
         t0 = time.perf_counter()
         geom = build_geometry("cone", OUT / f"g{i}", geometry_file=geometry, size_mm=size,
                               overrides=coarse)  # fmt: skip
-        after_mesh = rss_gb()
+        after_mesh = rss_gb(a.trim)
         steps = []
         for body in ("rig", "damper"):
             rm = reduce_body(geom, body, n_modes=12, rigid=False, cache_dir=OUT / "fe")
             del rm
-            steps.append(rss_gb())
+            steps.append(rss_gb(a.trim))
         del geom
-        end = rss_gb()
+        end = rss_gb(a.trim)
         first = first if first is not None else end
         took = time.perf_counter() - t0
         print(f"model {i + 1} ({size:g} mm, {took:.0f} s): mesh {after_mesh:.2f} GB, "

@@ -37,7 +37,6 @@ os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
 
 STUDY = ROOT / "studies" / "fidelity_paper_rig_pads.toml"
 PADS = ROOT / "geometry" / "paper_rig_pads.toml"
@@ -55,7 +54,7 @@ QS = ("friction_energy_mj", "peak_amplitude_mm", "peak_frequency_hz")
 def geometry_file(out: Path, variant: str) -> Path:
     """The pad rig's geometry file with ``[rig.mesh] mirror`` set for the variant (true for
     "mirror", false for "whole"), written into ``out``."""
-    from geometry_variant import with_mirror
+    from benchmarks.geometry_variant import with_mirror
 
     return with_mirror(
         PADS, variant == "mirror", out / f"paper_rig_pads_{variant}.toml", "mirror_fidelity.py"

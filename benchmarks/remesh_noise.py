@@ -44,7 +44,6 @@ os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "benchmarks"))
 
 OUT = ROOT / "results" / "remesh_noise"
 STUDY = ROOT / "studies" / "paper_rig.toml"
@@ -58,7 +57,7 @@ QS = (
 
 
 def _geometry(variant: str, scratch: Path) -> Path:
-    from geometry_variant import with_mirror
+    from benchmarks.geometry_variant import with_mirror
 
     return with_mirror(
         GEOMETRY, variant == "mirror", scratch / f"paper_rig_{variant}.toml", "remesh_noise.py"
