@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -54,8 +55,13 @@ QS = (
 
 def harmonic_list(label: str) -> list[int]:
     """The set "0-4" is [0, 1, 2, 3, 4] ("0-5@64": the harmonics of "0-5")."""
-    lo, hi = (int(x) for x in label.split("@")[0].split("-"))
-    return list(range(lo, hi + 1))
+    m = re.fullmatch(r"(\d+)-(\d+)(@\d+)?", label)
+    if m is None or int(m[1]) > int(m[2]):
+        raise SystemExit(
+            f"--harmonics: {label!r} is not a set; allowed: LO-HI with LO <= HI, "
+            "optionally @NT (e.g. 0-5 or 0-5@64)"
+        )
+    return list(range(int(m[1]), int(m[2]) + 1))
 
 
 def nt_option(label: str) -> list[str]:
@@ -117,6 +123,11 @@ def report(runs_dir: Path, labels: list[str]) -> dict:
     if not LIMITS.is_file():
         raise SystemExit(f"{LIMITS} is missing: run the pad study first (see the docstring)")
     lim = json.loads(LIMITS.read_text())["cases"]
+    missing = [x for x in labels if not (runs_dir / f"h{x}" / "timing.json").is_file()]
+    if missing:
+        raise SystemExit(
+            f"no run of harmonics {', '.join(missing)} in {runs_dir}: run without --report"
+        )
     runs = {x: json.loads((runs_dir / f"h{x}" / "timing.json").read_text()) for x in labels}
     base = runs.get("0-3", {}).get("wall_s")
     summary: dict = {"limits": str(LIMITS.relative_to(ROOT)), "sets": {}}
@@ -173,6 +184,8 @@ def main() -> None:
     a = ap.parse_args()
     runs = Path(a.out).resolve()
     labels = a.harmonics.split(",")
+    for x in labels:
+        harmonic_list(x)  # a malformed set is refused before any run
     if not a.report:
         for x in labels:
             run(runs, x, a.force)

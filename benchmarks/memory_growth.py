@@ -56,6 +56,8 @@ def main() -> None:
         "malloc_trim): growth that this removes is fragmentation, not retention",
     )
     a = ap.parse_args()
+    if not 1 <= a.n <= 20:
+        ap.error(f"--n: {a.n} models; allowed 1 to 20 (the mesh size steps down 0.5 mm a model)")
     from workbench.fe.reduce import reduce_body
     from workbench.geometry import build_geometry
 
