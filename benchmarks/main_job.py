@@ -6,8 +6,8 @@ modes, pictures and reports all computed), records the wall time and the
 load average before and after, the time of the paper-like rig's wedge curve
 out of phase at 30 N, and compares every case with the reference answers of
 ``benchmarks/reference/<study>.json`` (each case's peaks and stability
-counts on the code before issue 28's changes): the largest peak change, and
-the cases whose set of unstable points or peak verdict changed. Writes
+counts, written by --reference; last from round 19's run on mirror meshes):
+the largest peak change, and the cases whose set of unstable points or peak verdict changed. Writes
 ``main_job.json`` in ``--out``.
 
     .venv/bin/python benchmarks/main_job.py --out results/bench/main-job

@@ -5,7 +5,7 @@ studies of ``make run``, cold, 2 MPI ranks), ``hbm`` (bench_hbm.json: the
 46- and 146-pair curves and the comparison with pyHarm, in solve time and
 in whole-process CPU). A target whose part was not run says so. The
 reference answers (``benchmarks/reference/*.json``: each case's peaks and
-verdict counts on the code before issue 28) are compared with the main
+verdict counts, last written from round 19's run) are compared with the main
 job's: the largest peak change and the cases whose counts of unstable or
 unknown points changed.
 
