@@ -5,6 +5,11 @@ out of phase, 3.84 / 15 / 30 N, coarse mesh) is run once through the CLI;
 each test checks one finding on its results. The thresholds carry their
 reasons; where this heavy rig departs from the paper the test says so (see
 docs/FINDINGS.md; the paper-like rig is tests/test_findings_paper_rig.py).
+
+Marked slow (``make test-slow``, ``make bench``): its study took 230 s of one
+worker on a 2-core Intel Xeon (round 19), which put the default run at 16-17
+min there, over its 15-minute budget. The paper-like rig's findings, the main
+job's rig, stay in the default run.
 """
 
 from __future__ import annotations
@@ -15,7 +20,7 @@ import pytest
 from tests.conftest import ROOT, run_upd
 from workbench.post.results import StudyResults
 
-pytestmark = pytest.mark.xdist_group("findings")
+pytestmark = [pytest.mark.xdist_group("findings"), pytest.mark.slow]
 LOW, MID, HIGH = 3.84, 15.0, 30.0
 
 
