@@ -73,16 +73,25 @@ def choose(detected: str | None, flags: set[str]) -> str | None:
     return None
 
 
-def detected_core(python: str) -> str | None:
-    """The kernel OpenBLAS picks by itself in ``python``'s numpy (None: not OpenBLAS, or it
-    did not say)."""
-    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
-    env.update(OPENBLAS_VERBOSE="2", UPD_OPENBLAS_PROBE="1")
+def kernels_in_use(python: str, env: dict[str, str]) -> str | None:
+    """The kernels OpenBLAS runs in ``python``'s numpy started with ``env`` (None: not
+    OpenBLAS, or it did not say)."""
     out = subprocess.run(
-        [python, "-c", "import numpy"], env=env, capture_output=True, text=True, timeout=120
+        [python, "-c", "import numpy"],
+        env={**env, "OPENBLAS_VERBOSE": "2"},
+        capture_output=True,
+        text=True,
+        timeout=120,
     )
     m = re.search(r"^Core:\s*(\S.*)$", out.stdout + out.stderr, re.M)
     return m[1].strip() if m else None
+
+
+def detected_core(python: str) -> str | None:
+    """The kernels OpenBLAS picks by itself in ``python``'s numpy: no OPENBLAS_CORETYPE, the
+    hook kept out."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_CORETYPE"}
+    return kernels_in_use(python, {**env, "UPD_OPENBLAS_PROBE": "1"})
 
 
 def template():

@@ -66,7 +66,7 @@ PY
     echo "$want" >"$stamp"
 fi
 # OpenBLAS's kernels: Debian's OpenBLAS falls back to generic (SSE3) kernels on a CPU newer
-# than itself, 3-5 times slower on dense algebra; a start-up hook in the venv then picks the
+# than itself, 3-7 times slower on dense algebra; a start-up hook in the venv then picks the
 # right ones (OPENBLAS_CORETYPE). Checked on every run: the venv may have moved machine.
 "$venv/bin/python" scripts/openblas_core.py "$venv"
 # the compiled small-system corrector, built ahead of time so that small runs (upd frf) load
